@@ -1,0 +1,110 @@
+"""The five risk cues: names, units, physical ranges and their worst values.
+
+A cue that is NaN, outside its physical range, or not a number is *unknown*, and unknown is the
+worst case (DESIGN.md). This module is the one place that decides what unknown means.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import astuple, dataclass
+from enum import Enum
+
+import numpy as np
+
+CUE_NAMES: tuple[str, ...] = (
+    "lane_confidence",
+    "brightness",
+    "occlusion",
+    "obstacle_range_m",
+    "qr_staleness_s",
+)
+
+
+class Worsens(Enum):
+    """How a cue gets worse: which direction raises fear."""
+
+    WHEN_LOWER = "lower"  # e.g. lane_confidence, obstacle_range_m
+    WHEN_HIGHER = "higher"  # e.g. occlusion, qr_staleness_s
+    AWAY_FROM_BAND = "band"  # brightness: too dark and glare are both risky
+
+
+@dataclass(frozen=True)
+class CueSpec:
+    """Physical range and direction of one cue; ``worst`` is None when it depends on the band."""
+
+    name: str
+    low: float
+    high: float
+    worsens: Worsens
+    worst: float | None
+
+
+CUE_SPECS: tuple[CueSpec, ...] = (
+    CueSpec("lane_confidence", 0.0, 1.0, Worsens.WHEN_LOWER, 0.0),
+    CueSpec("brightness", 0.0, 255.0, Worsens.AWAY_FROM_BAND, None),
+    CueSpec("occlusion", 0.0, 1.0, Worsens.WHEN_HIGHER, 1.0),
+    CueSpec("obstacle_range_m", 0.0, math.inf, Worsens.WHEN_LOWER, 0.0),
+    CueSpec("qr_staleness_s", 0.0, math.inf, Worsens.WHEN_HIGHER, math.inf),
+)
+BRIGHTNESS = CUE_NAMES.index("brightness")
+OBSTACLE_RANGE = CUE_NAMES.index("obstacle_range_m")
+QR_STALENESS = CUE_NAMES.index("qr_staleness_s")
+_LOW = np.array([s.low for s in CUE_SPECS])
+_HIGH = np.array([s.high for s in CUE_SPECS])
+# brightness has two worst values (0 and 255); the fuzzy engine tries both and keeps the larger fear
+_WORST = np.array([s.worst if s.worst is not None else np.nan for s in CUE_SPECS])
+
+
+@dataclass(frozen=True)
+class Cues:
+    """One frame's cues in their physical units; any field may be NaN (= unknown = worst)."""
+
+    lane_confidence: float
+    brightness: float
+    occlusion: float
+    obstacle_range_m: float
+    qr_staleness_s: float
+
+    def as_array(self) -> np.ndarray:
+        """The cues as a float vector in CUE_NAMES order (non-numbers become NaN)."""
+        return np.array([_to_float(v) for v in astuple(self)], dtype=float)
+
+    @classmethod
+    def from_array(cls, values: np.ndarray) -> Cues:
+        return cls(*(float(v) for v in values))
+
+
+def _to_float(value: object) -> float:
+    if isinstance(value, bool):
+        return math.nan
+    try:
+        return float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError, OverflowError):
+        return math.nan
+
+
+def worst_filled(values: list[float], brightness_worst: float) -> tuple[list[float], list[bool]]:
+    """Scalar twin of ``with_worst`` for the per-frame path: (values with unknowns replaced, unknown flags)."""
+    unknown = [not (spec.low <= v <= spec.high) for spec, v in zip(CUE_SPECS, values, strict=True)]
+    filled = [
+        (brightness_worst if spec.worst is None else spec.worst) if bad else v
+        for spec, v, bad in zip(CUE_SPECS, values, unknown, strict=True)
+    ]
+    return filled, unknown
+
+
+def unknown_mask(x: np.ndarray) -> np.ndarray:
+    """True where a cue is unknown: NaN or outside its physical range (inf is valid only as a range)."""
+    x = np.asarray(x, dtype=float)
+    with np.errstate(invalid="ignore"):
+        return np.isnan(x) | (x < _LOW) | (x > _HIGH)
+
+
+def with_worst(x: np.ndarray, brightness_worst: float) -> np.ndarray:
+    """Replace unknown cues by their worst value (brightness by the given extreme, 0 or 255)."""
+    x = np.array(x, dtype=float)
+    worst = _WORST.copy()
+    worst[BRIGHTNESS] = brightness_worst
+    bad = unknown_mask(x)
+    return np.where(bad, np.broadcast_to(worst, x.shape), x)

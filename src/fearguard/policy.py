@@ -1,0 +1,253 @@
+"""Policy: fear → speed limit ∧ stopping envelope, the mode machine, and the emergency strategy.
+
+Pure functions over plain values; the supervisor owns the state and the clock. Policy never looks
+at pixels, only at fear, cues, the lead vehicle and the vehicle's limits.
+
+Speed limit = min(fear limit, stopping envelope, emergency cap), then rate-limited upward by the
+comfort acceleration. Each emergency cause that is active imposes its own cap and the smallest wins,
+so a cue getting worse can only add caps: the limit never rises when a cue worsens.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from enum import Enum
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fearguard.errors import RuleError
+from fearguard.fear import LEVEL_NAMES, Cause
+from fearguard.vehicle import VehicleLimits
+
+ENVELOPE_SHRINK = 1e-9  # [-] keeps v·t_r + v²/2a ≤ d − margin true after floating-point rounding
+
+
+class Mode(Enum):
+    NORMAL = "NORMAL"
+    CAUTION = "CAUTION"
+    EMERGENCY = "EMERGENCY"
+
+
+class Strategy(Enum):
+    PASS_THROUGH = "PASS_THROUGH"
+    FOLLOW_LEAD = "FOLLOW_LEAD"
+    STOP = "STOP"
+    CRAWL = "CRAWL"
+
+
+@dataclass(frozen=True)
+class Lead:
+    """The vehicle ahead in the ego lane: bearing (deg, + = left) and range if known (m)."""
+
+    bearing_deg: float
+    range_m: float | None = None
+
+    @property
+    def usable(self) -> bool:
+        """A lead can be followed when its bearing is a finite number (a range is optional)."""
+        return _finite(self.bearing_deg)
+
+    @property
+    def usable_range_m(self) -> float | None:
+        r = self.range_m
+        return float(r) if _finite(r) and float(r) >= 0.0 else None  # type: ignore[arg-type]
+
+
+def _finite(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+@dataclass(frozen=True)
+class PolicyConfig:
+    """The policy numbers of a rule file's ``[policy]`` table (defaults: a 1:10 model car)."""
+
+    speed_fraction: tuple[float, ...] = (1.0, 0.8, 0.6, 0.4, 0.3)  # of max speed, per fear level
+    caution_fear: float = 0.375  # [-] fear at or above which the mode is CAUTION
+    emergency_enter_fear: float = 0.7  # [-] fear that counts toward entering EMERGENCY
+    emergency_exit_fear: float = 0.5  # [-] fear below which the hold timer runs
+    enter_frames: int = 3  # [frames] consecutive frames over the enter threshold
+    hold_s: float = 2.0  # [s] time below the exit threshold before EMERGENCY is left
+    comfort_accel_mps2: float = 0.5  # [m/s²] fastest rise of the speed limit
+    crawl_fraction: float = 0.15  # [-] of max speed, CRAWL cap (and FOLLOW_LEAD without a range)
+    follow_time_gap_s: float = 1.5  # [s] FOLLOW_LEAD speed = lead range / time gap
+    follow_gain: float = 1.0  # [deg/deg] steering per degree of lead bearing
+
+    @classmethod
+    def from_table(cls, table: Mapping[str, Any], path: str | Path, line_of: Any) -> PolicyConfig:
+        """Validate a ``[policy]`` table; errors name the file, the line and the key."""
+        known = {f.name for f in fields(cls)}
+
+        def fail(key: str, problem: str) -> RuleError:
+            line = line_of(key)
+            where = f"line {line}, key policy.{key}" if line else f"key policy.{key}"
+            return RuleError(path, where, problem)
+
+        values: dict[str, Any] = {}
+        for key, value in table.items():
+            if key not in known:
+                raise fail(key, f"unknown policy key; known keys: {', '.join(sorted(known))}")
+            if key == "speed_fraction":
+                values[key] = _fractions(value, lambda p: fail(key, p))
+            elif key == "enter_frames":
+                if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                    raise fail(key, f"must be a whole number >= 1, got {value!r}")
+                values[key] = value
+            else:
+                if not _finite(value):
+                    raise fail(key, f"must be a finite number, got {value!r}")
+                values[key] = float(value)
+        cfg = cls(**values)
+        for key, ok, problem in (
+            ("emergency_enter_fear", 0.0 < cfg.emergency_enter_fear <= 1.0, "must be in (0, 1]"),
+            ("emergency_exit_fear", 0.0 <= cfg.emergency_exit_fear < cfg.emergency_enter_fear,
+             "must be >= 0 and below emergency_enter_fear (hysteresis)"),
+            ("caution_fear", 0.0 < cfg.caution_fear <= cfg.emergency_enter_fear,
+             "must be in (0, emergency_enter_fear]"),
+            ("hold_s", cfg.hold_s >= 0.0, "must be >= 0"),
+            ("comfort_accel_mps2", cfg.comfort_accel_mps2 > 0.0, "must be > 0"),
+            ("crawl_fraction", 0.0 <= cfg.crawl_fraction <= 1.0, "must be in [0, 1]"),
+            ("follow_time_gap_s", cfg.follow_time_gap_s > 0.0, "must be > 0"),
+            ("follow_gain", cfg.follow_gain >= 0.0, "must be >= 0"),
+        ):
+            if not ok:
+                raise fail(key, f"{problem}, got {getattr(cfg, key)}")
+        return cfg
+
+
+def _fractions(value: Any, fail: Any) -> tuple[float, ...]:
+    if isinstance(value, Mapping):
+        missing = [n for n in LEVEL_NAMES if n not in value]
+        extra = [k for k in value if k not in LEVEL_NAMES]
+        if missing or extra:
+            raise fail(f"needs exactly the levels {', '.join(LEVEL_NAMES)}; missing {missing}, unknown {extra}")
+        seq = [value[n] for n in LEVEL_NAMES]
+    else:
+        raise fail("must be a table like { very_low = 1.0, low = 0.8, ... }")
+    if not all(_finite(v) and 0.0 <= v <= 1.0 for v in seq):
+        raise fail(f"each fraction must be a number in [0, 1], got {seq}")
+    if any(b > a for a, b in zip(seq, seq[1:], strict=False)):
+        raise fail(f"fractions must not increase with fear (monotone policy), got {seq}")
+    return tuple(float(v) for v in seq)
+
+
+def fear_speed_mps(fear: float, level_anchors: np.ndarray, cfg: PolicyConfig, vehicle: VehicleLimits) -> float:
+    """Speed allowed by fear: the level fractions interpolated between the level anchors (increasing)."""
+    return float(np.interp(fear, level_anchors, cfg.speed_fraction)) * vehicle.max_speed_mps
+
+
+def stopping_distance_m(speed_mps: float, vehicle: VehicleLimits) -> float:
+    """Distance to stop from speed: reaction distance plus braking distance v²/2a."""
+    return speed_mps * vehicle.reaction_time_s + speed_mps**2 / (2.0 * vehicle.max_decel_mps2)
+
+
+def envelope_speed_mps(range_m: float, vehicle: VehicleLimits) -> float:
+    """Largest v with v·t_r + v²/(2a) ≤ max(0, d − margin); inf when nothing is in range."""
+    if math.isinf(range_m):
+        return math.inf
+    room = max(0.0, range_m - vehicle.stop_margin_m)
+    t_r, a = vehicle.reaction_time_s, vehicle.max_decel_mps2
+    v = 2.0 * room / (t_r + math.sqrt(t_r * t_r + 2.0 * room / a)) if room > 0.0 else 0.0
+    return v * (1.0 - ENVELOPE_SHRINK)
+
+
+def imminent_collision(range_m: float, speed_mps: float, vehicle: VehicleLimits) -> bool:
+    """The car cannot stop short of the obstacle from its current speed (or is inside the margin)."""
+    if math.isinf(range_m):
+        return False
+    return range_m <= vehicle.stop_margin_m or stopping_distance_m(speed_mps, vehicle) >= range_m - vehicle.stop_margin_m
+
+
+def rate_limited_mps(previous_mps: float, target_mps: float, dt_s: float, cfg: PolicyConfig) -> float:
+    """The limit falls at once and rises no faster than the comfort acceleration."""
+    return min(target_mps, previous_mps + cfg.comfort_accel_mps2 * max(dt_s, 0.0))
+
+
+@dataclass(frozen=True)
+class ModeState:
+    """The mode machine's memory between frames."""
+
+    mode: Mode = Mode.NORMAL
+    frames_over: int = 0  # consecutive frames with fear ≥ enter threshold
+    entered_s: float | None = None  # when EMERGENCY was entered
+    below_since_s: float | None = None  # since when fear is below the exit threshold (in EMERGENCY)
+
+
+def next_mode(state: ModeState, fear: float, t_s: float, at_once: bool, cfg: PolicyConfig) -> tuple[ModeState, str]:
+    """Advance the mode machine one frame; ``at_once`` (imminent collision, fault) enters immediately.
+
+    Returns the new state and what happened, for the reasons (empty when nothing changed).
+    """
+    over = fear >= cfg.emergency_enter_fear
+    if state.mode is Mode.EMERGENCY:
+        if at_once or fear >= cfg.emergency_exit_fear:
+            return ModeState(Mode.EMERGENCY, state.frames_over + over, state.entered_s, None), ""
+        below = t_s if state.below_since_s is None else state.below_since_s
+        if t_s - below >= cfg.hold_s:
+            mode = Mode.CAUTION if fear >= cfg.caution_fear else Mode.NORMAL
+            return ModeState(mode), f"left EMERGENCY after {t_s - below:.2f} s below fear {cfg.emergency_exit_fear:.2f}"
+        return ModeState(Mode.EMERGENCY, 0, state.entered_s, below), ""
+    frames = state.frames_over + 1 if over else 0
+    if at_once or frames >= cfg.enter_frames:
+        why = "at once" if at_once else f"after {frames} frames with fear >= {cfg.emergency_enter_fear:.2f}"
+        return ModeState(Mode.EMERGENCY, frames, t_s, None), f"entered EMERGENCY {why}"
+    mode = Mode.CAUTION if fear >= cfg.caution_fear else Mode.NORMAL
+    return ModeState(mode, frames), ""
+
+
+class _Priority(Enum):
+    """Tie-break among equal caps: the most protective strategy is reported."""
+
+    STOP = 0
+    FOLLOW_LEAD = 1
+    CRAWL = 2
+
+
+@dataclass(frozen=True)
+class EmergencyPlan:
+    """What to do in EMERGENCY: the strategy, its speed cap, and the steering to use (None = pass)."""
+
+    strategy: Strategy
+    cap_mps: float
+    steering_deg: float | None
+    why: str
+
+
+def emergency_plan(
+    cause_fears: Mapping[Cause, float],
+    dominant: Cause,
+    lead: Lead | None,
+    held_steering_deg: float,
+    cfg: PolicyConfig,
+    vehicle: VehicleLimits,
+) -> EmergencyPlan:
+    """Analyse, then act: every active cause proposes a plan; the one with the lowest cap wins.
+
+    A cause is active when its fear is at or above the exit threshold; the dominant cause always is.
+    """
+    active = [c for c in Cause if c is dominant or cause_fears.get(c, 0.0) >= cfg.emergency_exit_fear]
+    plans = []
+    for cause in active:
+        f = cause_fears.get(cause, 0.0)
+        if cause is Cause.COLLISION:
+            plans.append(EmergencyPlan(Strategy.STOP, 0.0, None, f"collision risk (fear {f:.2f}): stop"))
+        elif cause is Cause.ROAD and lead is not None and lead.usable:
+            rng = lead.usable_range_m
+            cap = rng / cfg.follow_time_gap_s if rng is not None else cfg.crawl_fraction * vehicle.max_speed_mps
+            steer = float(np.clip(cfg.follow_gain * lead.bearing_deg, -vehicle.max_steering_deg, vehicle.max_steering_deg))
+            gap = f"range {rng:.2f} m, {cfg.follow_time_gap_s:.1f} s gap" if rng is not None else "no range: crawl speed"
+            why = f"road not trusted (fear {f:.2f}): follow the lead at bearing {lead.bearing_deg:+.1f} deg ({gap})"
+            plans.append(EmergencyPlan(Strategy.FOLLOW_LEAD, cap, steer, why))
+        elif cause is Cause.ROAD:
+            why = f"road not trusted (fear {f:.2f}) and no lead to follow: stop, holding {held_steering_deg:+.1f} deg"
+            plans.append(EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg, why))
+        else:
+            cap = cfg.crawl_fraction * vehicle.max_speed_mps
+            plans.append(EmergencyPlan(Strategy.CRAWL, cap, None, f"localisation stale (fear {f:.2f}): crawl"))
+    best = min(plans, key=lambda p: (p.cap_mps, _Priority[p.strategy.name].value))
+    road_steer = [p.steering_deg for p in plans if p.steering_deg is not None]
+    steering = best.steering_deg if best.steering_deg is not None else (road_steer[0] if road_steer else None)
+    return EmergencyPlan(best.strategy, best.cap_mps, steering, best.why)

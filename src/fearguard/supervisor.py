@@ -1,0 +1,229 @@
+"""FearGuard: wraps a steering function and answers every frame with a safe Command.
+
+Observation → cues → fear (rule base) → policy (speed limit, mode, strategy) → Command.
+``step`` never raises: a fault anywhere (steering function raising or returning garbage, time not
+increasing, a malformed observation) becomes EMERGENCY/STOP with the fault in ``reasons``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from numbers import Real
+from typing import Any
+
+from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues
+from fearguard.fear import Cause, FearLevel, FearResult
+from fearguard.fuzzy.loader import load_rules
+from fearguard.fuzzy.rulebase import RuleBase
+from fearguard.policy import (
+    Lead,
+    Mode,
+    ModeState,
+    Strategy,
+    emergency_plan,
+    envelope_speed_mps,
+    fear_speed_mps,
+    imminent_collision,
+    next_mode,
+    rate_limited_mps,
+)
+from fearguard.vehicle import VehicleLimits
+
+SteeringFunction = Callable[[Any], float]
+TOP_RULES_IN_REASONS = 3  # [-] rules quoted in a command's reasons
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What the car knows at one instant. Give ``cues`` to skip perception (cue-level use)."""
+
+    t_s: float
+    speed_mps: float = 0.0
+    frame: Any = None
+    cues: Cues | None = None
+    ultrasonic_range_m: float | None = None
+    odometer_m: float | None = None
+    qr_payload: str | None = None
+    lead: Lead | None = None
+
+
+@dataclass(frozen=True)
+class Command:
+    """The supervisor's answer: steering to apply, speed not to exceed, and why."""
+
+    steering_deg: float
+    speed_limit_mps: float
+    mode: Mode
+    strategy: Strategy
+    fear: float
+    fear_level: FearLevel
+    cues: Cues
+    reasons: tuple[str, ...]
+    fear_limit_mps: float = math.nan  # the fear-based part of the limit
+    envelope_mps: float = math.nan  # the stopping envelope for the obstacle range
+
+
+@dataclass
+class _State:
+    mode: ModeState = field(default_factory=ModeState)
+    last_t_s: float | None = None
+    limit_mps: float | None = None
+    trusted_steering_deg: float = 0.0  # last steering from a NORMAL/CAUTION frame, held when the road is lost
+
+
+def _number(value: object) -> float | None:
+    """A finite real number as float, else None (bools and strings are not numbers here)."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        return None
+    f = float(value)
+    return f if math.isfinite(f) else None
+
+
+class FearGuard:
+    """Fuzzy affective safety supervisor around a steering function (frame → degrees, + = left)."""
+
+    def __init__(
+        self,
+        steer: SteeringFunction,
+        rules: RuleBase | str | None = None,
+        vehicle: VehicleLimits | None = None,
+        camera: Any = None,
+    ) -> None:
+        self.steer = steer
+        self.rules = rules if isinstance(rules, RuleBase) else load_rules(rules)
+        self.vehicle = vehicle if vehicle is not None else VehicleLimits()
+        self.camera = camera
+        self._state = _State()
+
+    def reset(self) -> None:
+        """Forget all history (mode, timers, speed-limit ramp)."""
+        self._state = _State()
+
+    def step(self, obs: Observation) -> Command:
+        """One frame: never raises; any fault becomes a safe command with a reason."""
+        try:
+            return self._step(obs)
+        except Exception as exc:  # last line of defence: a bug must not crash the car's loop
+            return self._fault_command(obs, f"fault: internal error {type(exc).__name__}: {exc}", None)
+
+    # -- the frame ----------------------------------------------------------------------------
+    def _step(self, obs: Observation) -> Command:
+        if not isinstance(obs, Observation):
+            return self._fault_command(obs, f"fault: expected an Observation, got {type(obs).__name__}", None)
+        t = _number(obs.t_s)
+        st = self._state
+        if t is None:
+            return self._fault_command(obs, f"fault: time t_s={obs.t_s!r} is not a finite number", None)
+        if st.last_t_s is not None and t <= st.last_t_s:
+            return self._fault_command(obs, f"fault: time did not increase ({st.last_t_s:.3f} s → {t:.3f} s)", t)
+        cues, cue_notes = self._cues(obs)
+        result = self.rules.evaluate(cues)
+        steering, steer_fault = self._steering(obs)
+        if steer_fault:
+            return self._fault_command(obs, steer_fault, t, cues, result)
+        return self._decide(obs, t, cues, result, steering, cue_notes)
+
+    def _cues(self, obs: Observation) -> tuple[Cues, list[str]]:
+        """Cues from the observation; absent sensors are neutral, failed or missing ones unknown (worst)."""
+        notes: list[str] = []
+        if isinstance(obs.cues, Cues):
+            values = obs.cues.as_array().tolist()
+        else:
+            values = [math.nan] * len(CUE_NAMES)
+            notes.append("no cues given and no perception ran: vision cues unknown (worst)")
+            rng = obs.ultrasonic_range_m
+            values[OBSTACLE_RANGE] = float(rng) if isinstance(rng, Real) and not isinstance(rng, bool) else math.nan
+        if not self.vehicle.has_ultrasonic:
+            values[OBSTACLE_RANGE] = math.inf  # no sensor: nothing known in range, declared not faked
+        if not self.vehicle.has_qr_localisation:
+            values[QR_STALENESS] = 0.0  # no QR localisation on this car: the cue does not apply
+        for name, v in zip(CUE_NAMES, values, strict=True):
+            if not isinstance(v, float) or math.isnan(v):
+                notes.append(f"{name} unknown: counted as its worst value")
+        return Cues(*values), notes
+
+    def _steering(self, obs: Observation) -> tuple[float, str]:
+        try:
+            raw = self.steer(obs.frame)
+        except Exception as exc:  # the wrapped estimator is foreign code: any failure is a fault
+            return 0.0, f"fault: steering function raised {type(exc).__name__}: {exc}"
+        value = _number(raw)
+        if value is None:
+            return 0.0, f"fault: steering function returned {raw!r}, not a finite number"
+        limit = self.vehicle.max_steering_deg
+        if abs(value) > limit:
+            return 0.0, f"fault: steering {value:+.1f} deg outside ±{limit:.1f} deg"
+        return value, ""
+
+    def _decide(self, obs: Observation, t: float, cues: Cues, result: FearResult, steering: float, notes: list[str]) -> Command:
+        st, v, cfg = self._state, self.vehicle, self.rules.policy
+        speed = _number(obs.speed_mps)
+        speed_now = v.max_speed_mps if speed is None or speed < 0 else speed  # unknown speed: assume the worst
+        range_m = self._range_for_policy(cues)
+        imminent = imminent_collision(range_m, speed_now, v)
+        st.mode, event = next_mode(st.mode, result.fear, t, imminent, cfg)
+        fear_limit = fear_speed_mps(result.fear, self.rules.level_anchors, cfg, v)
+        envelope = envelope_speed_mps(range_m, v)
+        target = min(fear_limit, envelope)
+        mode, strategy, out_steering = st.mode.mode, Strategy.PASS_THROUGH, steering
+        reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {result.dominant_cause.value}"]
+        if st.mode.mode is Mode.EMERGENCY:
+            plan = emergency_plan(result.cause_fears, result.dominant_cause, obs.lead, st.trusted_steering_deg, cfg, v)
+            strategy, target = plan.strategy, min(target, plan.cap_mps)
+            if plan.steering_deg is not None:
+                out_steering = plan.steering_deg
+            reasons.append(f"EMERGENCY {strategy.name}: {plan.why}")
+        else:
+            st.trusted_steering_deg = steering
+        if imminent:
+            reasons.append(f"imminent collision: obstacle at {range_m:.2f} m, cannot stop from {speed_now:.2f} m/s")
+        if event:
+            reasons.append(event)
+        dt = 0.0 if st.last_t_s is None else t - st.last_t_s
+        previous = st.limit_mps if st.limit_mps is not None else min(speed_now if speed is not None else 0.0, v.max_speed_mps)
+        limit = max(0.0, rate_limited_mps(previous, target, dt, cfg))
+        st.last_t_s, st.limit_mps = t, limit
+        reasons.append(self._limit_reason(limit, fear_limit, envelope, target, range_m))
+        if result.level > FearLevel.VERY_LOW or mode is not Mode.NORMAL:
+            reasons.extend(f"rule {text!r} fired {s:.2f}" for text, s in result.top_rules(TOP_RULES_IN_REASONS))
+        reasons.extend(notes)
+        return Command(out_steering, limit, mode, strategy, result.fear, result.level, cues, tuple(reasons), fear_limit, envelope)
+
+    def _range_for_policy(self, cues: Cues) -> float:
+        """Obstacle range for the envelope: unknown = 0 (worst), inf = nothing ahead."""
+        r = cues.obstacle_range_m
+        return r if isinstance(r, float) and r >= 0.0 else 0.0
+
+    @staticmethod
+    def _limit_reason(limit: float, fear_limit: float, envelope: float, target: float, range_m: float) -> str:
+        if limit < target - 1e-12:
+            return f"speed limit {limit:.2f} m/s: rising at the comfort acceleration toward {target:.2f} m/s"
+        if envelope <= fear_limit and envelope <= target + 1e-12 and not math.isinf(envelope):
+            return f"speed limit {limit:.2f} m/s: stopping envelope for an obstacle at {range_m:.2f} m"
+        if fear_limit <= target + 1e-12:
+            return f"speed limit {limit:.2f} m/s: set by fear"
+        return f"speed limit {limit:.2f} m/s: set by the emergency strategy"
+
+    # -- faults ---------------------------------------------------------------------------------
+    def _fault_command(
+        self, obs: object, why: str, t: float | None, cues: Cues | None = None, result: FearResult | None = None
+    ) -> Command:
+        """EMERGENCY/STOP at once, steering held at the last trusted angle; the clock restarts at t."""
+        st = self._state
+        if t is not None:
+            st.mode, _ = next_mode(st.mode, 1.0, t, True, self.rules.policy)
+            st.last_t_s = t
+        else:
+            st.mode = ModeState(Mode.EMERGENCY, 0, st.mode.entered_s, None)
+        st.limit_mps = 0.0
+        cues = cues if cues is not None else Cues(*([math.nan] * len(CUE_NAMES)))
+        fear = result.fear if result is not None else 1.0
+        level = result.level if result is not None else FearLevel.VERY_HIGH
+        held = max(-self.vehicle.max_steering_deg, min(self.vehicle.max_steering_deg, st.trusted_steering_deg))
+        reasons = (why, f"EMERGENCY STOP: fault, holding {held:+.1f} deg")
+        return Command(held, 0.0, Mode.EMERGENCY, Strategy.STOP, fear, level, cues, reasons, 0.0, 0.0)
+
+
+__all__ = ["Cause", "Command", "FearGuard", "Observation"]
