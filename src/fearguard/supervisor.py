@@ -70,7 +70,7 @@ class _State:
     mode: ModeState = field(default_factory=ModeState)
     last_t_s: float | None = None
     limit_mps: float | None = None
-    trusted_steering_deg: float = 0.0  # last steering from a NORMAL/CAUTION frame, held when the road is lost
+    trusted_steering_deg: float = 0.0  # last steering while the road was trusted, held when it is lost
 
 
 def _number(value: object) -> float | None:
@@ -175,8 +175,8 @@ class FearGuard:
             if plan.steering_deg is not None:
                 out_steering = plan.steering_deg
             reasons.append(f"EMERGENCY {strategy.name}: {plan.why}")
-        else:
-            st.trusted_steering_deg = steering
+        elif result.cause_fears[Cause.ROAD] < cfg.emergency_exit_fear:
+            st.trusted_steering_deg = steering  # the road picture is trusted: remember its steering
         if imminent:
             reasons.append(f"imminent collision: obstacle at {range_m:.2f} m, cannot stop from {speed_now:.2f} m/s")
         if event:

@@ -1,0 +1,36 @@
+"""Shared fixtures; hypothesis runs derandomized (fixed seed) so CI is repeatable."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from hypothesis import settings
+
+import fearguard as fg
+
+settings.register_profile("fearguard", derandomize=True, max_examples=150, deadline=None, print_blob=True)
+settings.load_profile("fearguard")
+
+RULES_DIR = Path(__file__).resolve().parents[1] / "rules"
+
+
+@pytest.fixture(scope="session")
+def rules() -> fg.RuleBase:
+    return fg.load_rules()
+
+
+@pytest.fixture
+def write_rules(tmp_path: Path):
+    """Write a variant of the default rule file: replace(old, new) pairs applied to its text."""
+
+    def write(*replacements: tuple[str, str], name: str = "variant.toml") -> Path:
+        text = (RULES_DIR / "default.toml").read_text()
+        for old, new in replacements:
+            assert old in text, f"fixture text not found: {old!r}"
+            text = text.replace(old, new)
+        path = tmp_path / name
+        path.write_text(text)
+        return path
+
+    return write

@@ -1,0 +1,256 @@
+"""Examples a person would check by hand: the mode machine, each emergency strategy, every fault."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import fearguard as fg
+from fearguard.policy import PolicyConfig, emergency_plan, envelope_speed_mps, imminent_collision, stopping_distance_m
+
+CALM = fg.Cues(0.9, 120.0, 0.0, math.inf, 0.5)
+LOST = fg.Cues(0.1, 120.0, 0.9, math.inf, 0.5)  # markings hidden, lane not found: road fear very high
+GLARE = fg.Cues(0.9, 250.0, 0.0, math.inf, 0.5)
+STALE = fg.Cues(0.9, 120.0, 0.0, math.inf, 25.0)
+NEAR = fg.Cues(0.9, 120.0, 0.0, 0.6, 0.5)
+
+
+def drive(guard: fg.FearGuard, cues: fg.Cues, t0: float, seconds: float, lead=None, dt: float = 0.1):
+    cmds, t = [], t0
+    while t < t0 + seconds - 1e-9:
+        cmds.append(guard.step(fg.Observation(t_s=round(t, 6), speed_mps=0.5, cues=cues, lead=lead)))
+        t += dt
+    return cmds
+
+
+@pytest.fixture
+def guard(rules) -> fg.FearGuard:
+    return fg.FearGuard(lambda frame: 5.0, rules=rules)
+
+
+def test_calm_drive_is_normal_pass_through_and_ramps_up(guard) -> None:
+    cmds = drive(guard, CALM, 0.0, 6.0)
+    assert all(c.mode is fg.Mode.NORMAL and c.strategy is fg.Strategy.PASS_THROUGH and c.steering_deg == 5.0 for c in cmds)
+    limits = [c.speed_limit_mps for c in cmds]
+    assert limits == sorted(limits) and limits[-1] == pytest.approx(2.0)  # very low fear: full speed
+    assert np.diff(limits).max() <= 0.5 * 0.1 + 1e-12  # comfort acceleration at 10 Hz
+
+
+def test_emergency_enters_on_the_third_frame_and_holds(guard) -> None:
+    cmds = drive(guard, LOST, 0.0, 0.3)
+    assert [c.mode for c in cmds] == [fg.Mode.CAUTION, fg.Mode.CAUTION, fg.Mode.EMERGENCY]
+    assert "entered EMERGENCY after 3 frames" in " ".join(cmds[-1].reasons)
+    calm = drive(guard, CALM, 0.3, 2.5)
+    modes = [c.mode for c in calm]
+    first_normal = modes.index(fg.Mode.NORMAL)
+    assert 0.3 + 0.1 * first_normal >= 0.3 + 2.0 - 1e-9  # 2 s below the exit threshold
+    assert all(m is fg.Mode.EMERGENCY for m in modes[:first_normal])
+    assert "left EMERGENCY after 2." in " ".join(calm[first_normal].reasons)
+
+
+def test_a_frame_back_over_the_exit_threshold_restarts_the_hold(guard) -> None:
+    drive(guard, LOST, 0.0, 0.3)
+    drive(guard, CALM, 0.3, 1.5)
+    assert drive(guard, LOST, 1.8, 0.1)[-1].mode is fg.Mode.EMERGENCY
+    again = drive(guard, CALM, 1.9, 1.9)
+    assert all(c.mode is fg.Mode.EMERGENCY for c in again)  # 1.9 s < hold_s since the last high frame
+
+
+def test_two_high_frames_then_calm_never_enter(guard) -> None:
+    cmds = drive(guard, LOST, 0.0, 0.2) + drive(guard, CALM, 0.2, 0.1) + drive(guard, LOST, 0.3, 0.2)
+    assert fg.Mode.EMERGENCY not in [c.mode for c in cmds]
+
+
+def test_follow_lead_steers_toward_its_bearing_with_a_time_gap(guard) -> None:
+    cmd = drive(guard, LOST, 0.0, 3.0, lead=fg.Lead(bearing_deg=-6.0, range_m=0.9))[-1]
+    assert cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.FOLLOW_LEAD
+    assert cmd.steering_deg == -6.0  # follow_gain 1.0 × bearing, not the road estimator's 5°
+    assert cmd.speed_limit_mps == pytest.approx(0.9 / 1.5)  # range / time gap (below the fear limit)
+    assert "follow the lead at bearing -6.0 deg" in " ".join(cmd.reasons)
+
+
+def test_follow_lead_without_range_crawls_and_clamps_steering(guard) -> None:
+    cmd = drive(guard, LOST, 0.0, 3.0, lead=fg.Lead(bearing_deg=80.0))[-1]
+    assert cmd.strategy is fg.Strategy.FOLLOW_LEAD and cmd.steering_deg == 30.0
+    assert cmd.speed_limit_mps == pytest.approx(0.15 * 2.0)
+
+
+def test_lost_road_without_lead_stops_holding_the_last_trusted_steering(rules) -> None:
+    angles = iter([3.0] * 10 + [25.0] * 100)
+    guard = fg.FearGuard(lambda frame: next(angles), rules=rules)
+    drive(guard, CALM, 0.0, 1.0)
+    cmd = drive(guard, LOST, 1.0, 2.0)[-1]
+    assert cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
+    assert cmd.steering_deg == 3.0  # the picture is not trusted: its 25° are ignored
+    unusable = drive(guard, LOST, 3.0, 0.5, lead=fg.Lead(bearing_deg=math.nan))[-1]
+    assert unusable.strategy is fg.Strategy.STOP
+
+
+def test_glare_without_lead_stops(guard) -> None:
+    cmd = drive(guard, GLARE, 0.0, 1.0)[-1]
+    assert cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
+
+
+def test_collision_risk_stops_and_keeps_road_steering(guard) -> None:
+    cmd = drive(guard, NEAR, 0.0, 1.0)[-1]
+    assert cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP
+    assert cmd.speed_limit_mps == 0.0 and cmd.steering_deg == 5.0
+    assert "collision risk" in " ".join(cmd.reasons)
+
+
+def test_stale_localisation_alone_crawls(guard) -> None:
+    cmd = drive(guard, STALE, 0.0, 5.0)[-1]
+    assert cmd.strategy is fg.Strategy.CRAWL and cmd.steering_deg == 5.0
+    assert cmd.speed_limit_mps == pytest.approx(0.15 * 2.0)
+
+
+def test_the_lowest_cap_wins_when_causes_combine(guard) -> None:
+    both = fg.Cues(0.1, 120.0, 0.9, 0.6, 25.0)  # road lost, obstacle near, localisation stale
+    cmd = drive(guard, both, 0.0, 1.0, lead=fg.Lead(2.0, 3.0))[-1]
+    assert cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
+    assert cmd.steering_deg == 2.0  # road not trusted: steer by the lead while braking
+
+
+def test_imminent_collision_enters_at_once(guard) -> None:
+    cmd = guard.step(fg.Observation(t_s=0.0, speed_mps=1.5, cues=fg.Cues(0.9, 120.0, 0.0, 0.5, 0.5)))
+    assert cmd.mode is fg.Mode.EMERGENCY and "imminent collision" in " ".join(cmd.reasons)
+    assert "entered EMERGENCY at once" in " ".join(cmd.reasons)
+
+
+def test_envelope_limits_speed_near_an_obstacle(rules) -> None:
+    car = fg.VehicleLimits(max_decel_mps2=1.0)  # weak brakes: physics binds before fear does
+    guard = fg.FearGuard(lambda f: 0.0, rules=rules, vehicle=car)
+    cmd = drive(guard, fg.Cues(0.9, 120.0, 0.0, 2.3, 0.5), 0.0, 10.0)[-1]
+    v = cmd.speed_limit_mps
+    assert v == pytest.approx(cmd.envelope_mps) and v < cmd.fear_limit_mps
+    assert stopping_distance_m(v, car) == pytest.approx(2.3 - 0.15, rel=1e-6)
+    assert "stopping envelope" in " ".join(cmd.reasons)
+
+
+def test_envelope_math() -> None:
+    car = fg.VehicleLimits()
+    assert envelope_speed_mps(math.inf, car) == math.inf
+    assert envelope_speed_mps(0.1, car) == 0.0
+    assert not imminent_collision(math.inf, 2.0, car)
+    assert imminent_collision(0.1, 0.0, car) and not imminent_collision(3.0, 1.0, car)
+
+
+@pytest.mark.parametrize(
+    ("steer", "fault"),
+    [
+        (lambda f: 1 / 0, "raised ZeroDivisionError"),
+        (lambda f: math.nan, "not a finite number"),
+        (lambda f: math.inf, "not a finite number"),
+        (lambda f: "left", "not a finite number"),
+        (lambda f: None, "not a finite number"),
+        (lambda f: True, "not a finite number"),
+        (lambda f: 45.0, "outside ±30.0 deg"),
+    ],
+)
+def test_faulty_steering_function_gives_a_safe_stop(rules, steer, fault) -> None:
+    good = iter([4.0, 4.0])
+    guard = fg.FearGuard(lambda f: next(good, None) if next(iter([0])) == 0 and good.__length_hint__() else steer(f), rules=rules)
+    drive(guard, CALM, 0.0, 0.2)
+    cmd = guard.step(fg.Observation(t_s=0.5, speed_mps=1.0, cues=CALM))
+    assert cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
+    assert fault in cmd.reasons[0] and cmd.steering_deg == 4.0
+    assert cmd.fear == pytest.approx(rules.evaluate(CALM).fear)
+
+
+def test_numpy_steering_values_are_accepted(rules) -> None:
+    guard = fg.FearGuard(lambda f: np.float32(2.5), rules=rules)
+    assert guard.step(fg.Observation(t_s=0.0, cues=CALM)).steering_deg == 2.5
+
+
+@pytest.mark.parametrize(
+    ("obs", "fault"),
+    [
+        (fg.Observation(t_s=math.nan, cues=CALM), "is not a finite number"),
+        (fg.Observation(t_s="soon", cues=CALM), "is not a finite number"),
+        (fg.Observation(t_s=1.0, cues=CALM), "time did not increase"),
+        (fg.Observation(t_s=0.5, cues=CALM), "time did not increase"),
+        ("not an observation", "expected an Observation"),
+    ],
+)
+def test_bad_observations_give_a_safe_stop(guard, obs, fault) -> None:
+    guard.step(fg.Observation(t_s=1.0, cues=CALM))
+    cmd = guard.step(obs)
+    assert cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
+    assert fault in cmd.reasons[0]
+
+
+def test_time_going_backwards_restarts_the_clock(guard) -> None:
+    drive(guard, CALM, 100.0, 1.0)
+    assert guard.step(fg.Observation(t_s=0.0, cues=CALM)).mode is fg.Mode.EMERGENCY
+    cmds = drive(guard, CALM, 0.1, 3.0)
+    assert cmds[-1].mode is fg.Mode.NORMAL  # held 2 s from the new clock, then released
+
+
+def test_fault_before_any_frame_and_internal_errors_never_raise(rules) -> None:
+    guard = fg.FearGuard(lambda f: 0.0, rules=rules)
+    cmd = guard.step(fg.Observation(t_s=math.inf))
+    assert cmd.strategy is fg.Strategy.STOP and cmd.fear == 1.0 and cmd.fear_level is fg.FearLevel.VERY_HIGH
+
+    class Boom:
+        def evaluate(self, cues):
+            raise RuntimeError("broken rule base")
+
+    guard.rules = Boom()  # type: ignore[assignment]
+    cmd = guard.step(fg.Observation(t_s=1.0, cues=CALM))
+    assert cmd.strategy is fg.Strategy.STOP and "internal error RuntimeError: broken rule base" in cmd.reasons[0]
+
+
+def test_nan_cue_is_worst_and_said_so(guard) -> None:
+    cmd = guard.step(fg.Observation(t_s=0.0, cues=fg.Cues(0.9, 120.0, math.nan, math.inf, 0.5)))
+    assert cmd.fear == pytest.approx(guard.rules.evaluate(fg.Cues(0.9, 120.0, 1.0, math.inf, 0.5)).fear)
+    assert "occlusion unknown: counted as its worst value" in cmd.reasons
+
+
+def test_without_cues_vision_is_unknown_and_ultrasonic_fills_the_range(guard) -> None:
+    cmd = guard.step(fg.Observation(t_s=0.0, speed_mps=0.0, ultrasonic_range_m=1.2))
+    assert cmd.cues.obstacle_range_m == 1.2 and math.isnan(cmd.cues.lane_confidence)
+    assert cmd.fear_level is fg.FearLevel.VERY_HIGH and any("no perception ran" in r for r in cmd.reasons)
+    garbage = guard.step(fg.Observation(t_s=0.1, ultrasonic_range_m="far"))
+    assert math.isnan(garbage.cues.obstacle_range_m)
+
+
+def test_absent_sensors_are_neutral_not_worst(rules) -> None:
+    car = fg.VehicleLimits(has_ultrasonic=False, has_qr_localisation=False)
+    guard = fg.FearGuard(lambda f: 0.0, rules=rules, vehicle=car)
+    cmd = drive(guard, fg.Cues(0.9, 120.0, 0.0, math.nan, math.nan), 0.0, 5.0)[-1]
+    assert cmd.cues.obstacle_range_m == math.inf and cmd.cues.qr_staleness_s == 0.0
+    assert cmd.mode is fg.Mode.NORMAL and cmd.speed_limit_mps == pytest.approx(2.0)
+
+
+def test_unknown_speed_assumes_the_worst_for_imminence(guard) -> None:
+    cmd = guard.step(fg.Observation(t_s=0.0, speed_mps=math.nan, cues=fg.Cues(0.9, 120.0, 0.0, 1.0, 0.5)))
+    assert cmd.mode is fg.Mode.EMERGENCY  # at 2 m/s the car needs 1.07 m + margin: imminent
+
+
+def test_reset_and_rules_by_path(rules) -> None:
+    guard = fg.FearGuard(lambda f: 0.0, rules="rules/road_car.toml")
+    assert guard.rules.name != rules.name
+    drive(guard, LOST, 0.0, 1.0)
+    guard.reset()
+    assert guard.step(fg.Observation(t_s=0.0, cues=CALM)).mode is fg.Mode.NORMAL
+
+
+def test_vehicle_limits_are_validated_and_sane() -> None:
+    car = fg.VehicleLimits()
+    assert car.max_speed_mps > 0 and car.max_decel_mps2 > 0 and car.max_steering_deg > 0
+    with pytest.raises(ValueError, match="max_decel_mps2 must be > 0"):
+        fg.VehicleLimits(max_decel_mps2=0.0)
+    with pytest.raises(ValueError, match="reaction_time_s must be >= 0"):
+        fg.VehicleLimits(reaction_time_s=-0.1)
+    with pytest.raises(ValueError, match="finite number"):
+        fg.VehicleLimits(max_speed_mps=math.nan)
+
+
+def test_policy_defaults_are_safe() -> None:
+    cfg = PolicyConfig()
+    assert cfg.emergency_exit_fear < cfg.emergency_enter_fear and cfg.enter_frames >= 1 and cfg.hold_s > 0
+    assert list(cfg.speed_fraction) == sorted(cfg.speed_fraction, reverse=True)
+    plan = emergency_plan({fg.Cause.LOCALISATION: 0.8}, fg.Cause.LOCALISATION, None, 0.0, cfg, fg.VehicleLimits())
+    assert plan.strategy is fg.Strategy.CRAWL and plan.steering_deg is None
