@@ -110,3 +110,42 @@ def test_level_of_takes_the_stronger_term_and_the_higher_on_ties(rules: fg.RuleB
     assert rules.level_of(0.125) is fg.FearLevel.LOW  # very_low and low both 0.5: the higher wins
     assert rules.level_of(0.74) is fg.FearLevel.HIGH
     assert rules.level_of(1.0) is fg.FearLevel.VERY_HIGH
+
+
+MINIMAL = """
+name = "one cue"
+[variables.obstacle_range_m]
+universe = [0.0, 4.0, 0.01]
+near = { trapmf = [0.0, 0.0, 0.5, 1.0] }
+far = { trapmf = [0.5, 1.0, 4.0, 4.0] }
+[fear]
+universe = [0.0, 1.0, 0.005]
+very_low = { trimf = [0.0, 0.0, 0.25] }
+low = { trimf = [0.0, 0.25, 0.5] }
+medium = { trimf = [0.25, 0.5, 0.75] }
+high = { trimf = [0.5, 0.75, 1.0] }
+very_high = { trimf = [0.75, 1.0, 1.0] }
+[groups.collision]
+cause = "collision"
+rules = ["IF obstacle_range_m IS near THEN fear IS very_high"]
+"""
+
+
+def test_a_minimal_rule_base_ignores_cues_it_does_not_use(tmp_path) -> None:
+    path = tmp_path / "minimal.toml"
+    path.write_text(MINIMAL)
+    rb = fg.load_rules(path)
+    assert rb.policy == fg.PolicyConfig() and rb.brightness_band == (0.0, 255.0)
+    assert rb.evaluate(fg.Cues(math.nan, math.nan, math.nan, 0.2, math.nan)).fear > 0.9
+    # nothing fires when far: the (incomplete) rule base answers with the worst fear
+    far = rb.evaluate(fg.Cues(0.9, 120.0, 0.0, 3.0, 0.5))
+    assert far.fear == 1.0 and far.top_rules() == [] and rb.evaluate_batch(np.array([[0.9, 120.0, 0.0, 3.0, 0.5]]))[0] == 1.0
+
+
+def test_unknown_brightness_takes_the_worse_extreme(write_rules) -> None:
+    rb = fg.load_rules(write_rules(('"IF brightness IS dark OR brightness IS glare THEN fear IS very_high"',
+                                    '"IF brightness IS dark THEN fear IS high", "IF brightness IS glare THEN fear IS very_high"')))
+    glare = rb.evaluate(fg.Cues(0.9, 255.0, 0.0, 3.0, 0.5)).fear
+    assert glare > rb.evaluate(fg.Cues(0.9, 0.0, 0.0, 3.0, 0.5)).fear
+    assert rb.evaluate(fg.Cues(0.9, math.nan, 0.0, 3.0, 0.5)).fear == glare
+    assert rb.reference_fear(fg.Cues(0.9, math.nan, 0.0, 3.0, 0.5)) == pytest.approx(glare, abs=AGREEMENT)

@@ -86,7 +86,10 @@ def worse(cues: fg.Cues, name: str, amount: float) -> fg.Cues | None:
         new = v + 255.0 * amount
     else:
         return None
-    new = min(max(new, 0.0), 1.0) if name in ("lane_confidence", "occlusion") else min(max(new, 0.0), 255.0) if name == "brightness" else new
+    if name in ("lane_confidence", "occlusion"):
+        new = min(max(new, 0.0), 1.0)
+    elif name == "brightness":
+        new = min(max(new, 0.0), 255.0)
     return fg.Cues(**{**{n: getattr(cues, n) for n in CUE_NAMES}, name: new})
 
 

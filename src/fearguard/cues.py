@@ -50,7 +50,9 @@ CUE_SPECS: tuple[CueSpec, ...] = (
 BRIGHTNESS = CUE_NAMES.index("brightness")
 OBSTACLE_RANGE = CUE_NAMES.index("obstacle_range_m")
 QR_STALENESS = CUE_NAMES.index("qr_staleness_s")
-_LOW = np.array([s.low for s in CUE_SPECS])
+_LOWS = [s.low for s in CUE_SPECS]
+_HIGHS = [s.high for s in CUE_SPECS]
+_LOW = np.array(_LOWS)
 _HIGH = np.array([s.high for s in CUE_SPECS])
 # brightness has two worst values (0 and 255); the fuzzy engine tries both and keeps the larger fear
 _WORST = np.array([s.worst if s.worst is not None else np.nan for s in CUE_SPECS])
@@ -86,7 +88,9 @@ def _to_float(value: object) -> float:
 
 def worst_filled(values: list[float], brightness_worst: float) -> tuple[list[float], list[bool]]:
     """Scalar twin of ``with_worst`` for the per-frame path: (values with unknowns replaced, unknown flags)."""
-    unknown = [not (spec.low <= v <= spec.high) for spec, v in zip(CUE_SPECS, values, strict=True)]
+    unknown = [not (lo <= v <= hi) for lo, hi, v in zip(_LOWS, _HIGHS, values, strict=True)]
+    if not any(unknown):
+        return values, unknown
     filled = [
         (brightness_worst if spec.worst is None else spec.worst) if bad else v
         for spec, v, bad in zip(CUE_SPECS, values, unknown, strict=True)

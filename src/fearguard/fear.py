@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import Enum, IntEnum
 
@@ -37,11 +37,13 @@ class FearResult:
     activations: Mapping[str, float]
     group_fears: Mapping[str, float]
     cause_fears: Mapping[Cause, float]
-    drivers: tuple[tuple[str, float], ...] = ()  # rules that fired in the group setting the fear, worst level first
+    candidate_drivers: Sequence[tuple[str, int]] = ()  # (rule text, fear level) of the group setting the fear
 
     def top_rules(self, n: int = 3) -> list[tuple[str, float]]:
-        """The n rules that drove the fear: from the group with the highest fear, worst conclusion first."""
-        return list(self.drivers[:n])
+        """The n rules that drove the fear: fired rules of the group with the highest fear, worst level first."""
+        fired = [(text, self.activations[text], level) for text, level in self.candidate_drivers if self.activations[text] > 0.0]
+        fired.sort(key=lambda item: (-item[2], -item[1]))
+        return [(text, strength) for text, strength, _ in fired[:n]]
 
     @property
     def dominant_cause(self) -> Cause:

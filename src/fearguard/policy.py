@@ -14,6 +14,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from enum import Enum
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -91,7 +92,7 @@ class PolicyConfig:
             if key not in known:
                 raise fail(key, f"unknown policy key; known keys: {', '.join(sorted(known))}")
             if key == "speed_fraction":
-                values[key] = _fractions(value, lambda p: fail(key, p))
+                values[key] = _fractions(value, lambda p, key=key: fail(key, p))
             elif key == "enter_frames":
                 if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                     raise fail(key, f"must be a whole number >= 1, got {value!r}")
@@ -129,7 +130,7 @@ def _fractions(value: Any, fail: Any) -> tuple[float, ...]:
         raise fail("must be a table like { very_low = 1.0, low = 0.8, ... }")
     if not all(_finite(v) and 0.0 <= v <= 1.0 for v in seq):
         raise fail(f"each fraction must be a number in [0, 1], got {seq}")
-    if any(b > a for a, b in zip(seq, seq[1:], strict=False)):
+    if any(b > a for a, b in pairwise(seq)):
         raise fail(f"fractions must not increase with fear (monotone policy), got {seq}")
     return tuple(float(v) for v in seq)
 

@@ -106,11 +106,14 @@ def check_group(rb: RuleBase, gi: int, group: Group, examples: int = 3) -> Group
             drop = np.where(below | np.broadcast_to(above, step.shape), drop, 0.0)
         for idx in np.argwhere(drop > MONOTONE_TOL)[:examples]:
             i = tuple(int(v) for v in idx)
-            nxt = list(i)
-            nxt[k] += 1
+            nxt = (*i[:k], i[k] + 1, *i[k + 1 :])
+            lower_is_worse = spec.worsens is Worsens.WHEN_LOWER or (
+                spec.worsens is Worsens.AWAY_FROM_BAND and axes[k][i[k]] < rb.brightness_band[0]
+            )
+            better, worse = (nxt, i) if lower_is_worse else (i, nxt)
             violations.append(
-                f"fear falls {fear[i]:.4f} → {fear[tuple(nxt)]:.4f} when {name} goes "
-                f"{axes[k][i[k]]:.4g} → {axes[k][i[k] + 1]:.4g} at {_describe(group.inputs, axes, i)}"
+                f"fear falls {fear[better]:.4f} → {fear[worse]:.4f} when {name} worsens "
+                f"{axes[k][better[k]]:.4g} → {axes[k][worse[k]]:.4g} at {_describe(group.inputs, axes, i)}"
             )
     return GroupCheck(group.name, group.inputs, tuple(len(a) for a in axes), uncovered, tuple(violations))
 

@@ -10,6 +10,7 @@ floats, ~30 µs) for ``evaluate`` and one vectorised path for ``evaluate_batch``
 
 from __future__ import annotations
 
+from bisect import bisect_left
 from collections.abc import Callable
 from functools import reduce
 from typing import TYPE_CHECKING, Any
@@ -28,23 +29,23 @@ CHUNK_ROWS = 256  # rows per block in evaluate_batch: keeps the (groups, rows, f
 Memberships = list[Any]  # per cue index: memberships of its terms (floats or (N,) arrays), None if unused
 
 
-def _compile(node: Node, index: dict[tuple[str, str], tuple[int, int]], vector: bool) -> Callable[[Memberships], Any]:
-    """Turn a rule's antecedent tree into a function of the memberships (floats or arrays)."""
+def _expression(node: Node, index: dict[tuple[str, str], tuple[int, int]], vector: bool) -> str:
+    """Python source of a rule's antecedent over ``m`` (memberships per cue index, per term index)."""
     if isinstance(node, Is):
         v, t = index[(node.variable, node.term)]
-        return lambda mem: mem[v][t]
+        return f"m[{v}][{t}]"
     if isinstance(node, Not):
-        inner = _compile(node.operand, index, vector)
-        return lambda mem: 1.0 - inner(mem)
-    parts = [_compile(op, index, vector) for op in node.operands]
-    if isinstance(node, And):
-        op = np.fmin if vector else min
-    else:  # Or
-        op = np.fmax if vector else max
-    if len(parts) == 2:  # the common case, without reduce's overhead on the per-frame path
-        first, second = parts
-        return lambda mem: op(first(mem), second(mem))
-    return lambda mem: reduce(op, (p(mem) for p in parts))
+        return f"(1.0 - {_expression(node.operand, index, vector)})"
+    name = ("fmin" if vector else "min") if isinstance(node, And) else ("fmax" if vector else "max")
+    parts = [_expression(op, index, vector) for op in node.operands]
+    return reduce(lambda acc, p: f"{name}({acc}, {p})", parts)
+
+
+def _compile(exprs: list[str], vector: bool) -> Callable[[Memberships], Any]:
+    """One function returning every rule's firing strength. Generated from our own parsed trees (only
+    indices, min/max and weights), it costs one call per frame instead of one per tree node."""
+    body = f"({', '.join(exprs)},)" if not vector else f"[{', '.join(exprs)}]"
+    return eval(f"lambda m: {body}", {"fmin": np.fmin, "fmax": np.fmax, "min": min, "max": max, "__builtins__": {}})
 
 
 def centroid_weights(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -59,6 +60,30 @@ def centroid_weights(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return area, moment
 
 
+class _ClipSum:
+    """S(β) = Σ_i w_i·min(β, g_i) for the area and moment weights: one bisect into the sorted g.
+
+    When at most two fear terms overlap anywhere, max(a, b) = a + b − min(a, b) turns the aggregated
+    set's area and moment into sums of such S over the active levels and their overlapping pairs, so
+    the scalar path needs no array work at all (exactly the dense result, up to rounding).
+    """
+
+    def __init__(self, g: np.ndarray, weights: np.ndarray) -> None:
+        order = np.argsort(g, kind="stable")
+        self.g = g[order].tolist()
+        w = weights[order]  # (points, [area, moment])
+        cum_wg = np.vstack([np.zeros((1, 2)), np.cumsum(w * g[order][:, None], axis=0)])
+        cum_w = np.vstack([np.zeros((1, 2)), np.cumsum(w, axis=0)])
+        total_a, total_m = cum_w[-1]
+        self.rows = [
+            (a_g, m_g, total_a - a, total_m - m) for (a_g, m_g), (a, m) in zip(cum_wg.tolist(), cum_w.tolist(), strict=True)
+        ]
+
+    def __call__(self, beta: float) -> tuple[float, float]:
+        a_g, m_g, a_rest, m_rest = self.rows[bisect_left(self.g, beta)]
+        return a_g + beta * a_rest, m_g + beta * m_rest
+
+
 class _Sampled:
     """One variable's sampled terms, ready for linear interpolation at a crisp value."""
 
@@ -68,11 +93,16 @@ class _Sampled:
         self.n = len(universe)
         self.matrix = np.vstack(terms)  # (n_terms, n_points)
         self.rows = self.matrix.T.tolist()  # per point: every term's membership (fast scalar lookup)
+        self.last = float(self.n - 1)
 
     def grades(self, value: float) -> list[float]:
         """Membership of a crisp value in every term (clipped to the universe, as scikit-fuzzy does)."""
-        pos = min(max((value - self.lo) / self.step, 0.0), self.n - 1.0)
-        k = min(int(pos), self.n - 2)
+        pos = (value - self.lo) / self.step
+        if pos <= 0.0:
+            return self.rows[0]
+        if pos >= self.last:
+            return self.rows[-1]
+        k = int(pos)
         w = pos - k
         return [a + w * (b - a) for a, b in zip(self.rows[k], self.rows[k + 1], strict=True)]
 
@@ -99,21 +129,39 @@ class Engine:
                 index.update({(name, term): (i, t) for t, term in enumerate(var.terms)})
         self.group_names = [g.name for g in rb.groups]
         self.causes = [g.cause for g in rb.groups]
-        self.rules = [
-            (gi, int(r.level), r.weight, r.text, _compile(r.antecedent, index, False), _compile(r.antecedent, index, True))
-            for gi, g in enumerate(rb.groups)
-            for r in g.rules
-        ]
+        rules = [(gi, r) for gi, g in enumerate(rb.groups) for r in g.rules]
+        self.rule_texts = [r.text for _, r in rules]
+        self.rule_slots = [(gi, int(r.level)) for gi, r in rules]  # where each strength accumulates
+
+        def weighted(r: Any, vector: bool) -> str:
+            expr = _expression(r.antecedent, index, vector)
+            return expr if r.weight == 1.0 else f"{expr} * {r.weight!r}"
+
+        self.strengths = _compile([weighted(r, False) for _, r in rules], vector=False)
+        self.strengths_batch = _compile([weighted(r, True) for _, r in rules], vector=True)
         self.fear = _Sampled(rb.fear_variable.universe, list(rb.fear_variable.terms.values()))
         self.out_mf = self.fear.matrix
         # each level's support as a slice: the batch path only touches the points a level can raise
         self.supports = [slice(int(np.flatnonzero(mf > 0)[0]), int(np.flatnonzero(mf > 0)[-1]) + 1) for mf in self.out_mf]
         self.centroid_w = np.column_stack(centroid_weights(rb.fear_variable.universe))  # (points, [area, moment])
+        mf = self.out_mf
+        self.closed_form = int((mf > 0).sum(axis=0).max()) <= 2  # at most two fear terms overlap anywhere
+        self.level_sums = [_ClipSum(g, self.centroid_w) for g in mf]
+        self.pair_table = [
+            [_ClipSum(np.minimum(mf[a], mf[b]), self.centroid_w) if a < b and np.any((mf[a] > 0) & (mf[b] > 0)) else None
+             for b in range(len(mf))]
+            for a in range(len(mf))
+        ]
+        self.group_rules = [[(r.text, int(r.level)) for r in g.rules] for g in rb.groups]
 
     def level_of(self, fear: float) -> FearLevel:
         """The level whose fear term has the highest membership at this fear (ties: the higher)."""
         grades = self.fear.grades(fear)
-        return FearLevel(max(range(len(grades)), key=lambda i: (grades[i], i)))
+        best = 0
+        for i, g in enumerate(grades):
+            if g >= grades[best]:
+                best = i
+        return FearLevel(best)
 
     def _defuzz(self, mu: np.ndarray) -> np.ndarray:
         """Centroid of each aggregated set (last axis); a set with no area (no rule fired) gives 1."""
@@ -128,22 +176,44 @@ class Engine:
         mem: Memberships = [None] * len(CUE_NAMES)
         for i, sampled in self.inputs:
             mem[i] = sampled.grades(x[i])
-        alpha: dict[tuple[int, int], float] = {}  # (group, level) → activation, only where a rule fired
-        activations: dict[str, float] = {}
-        for gi, level, weight, text, scalar, _ in self.rules:
-            s = scalar(mem) * weight
-            activations[text] = s
-            if s > alpha.get((gi, level), 0.0):
-                alpha[(gi, level)] = s
-        fears = [1.0] * len(self.group_names)  # a group where no rule fired: fear 1
-        if alpha:
-            keys = sorted(alpha)
-            clipped = np.minimum(self.out_mf[[k[1] for k in keys]], np.array([alpha[k] for k in keys])[:, None])
-            starts = [n for n, k in enumerate(keys) if n == 0 or k[0] != keys[n - 1][0]]
+        strengths = self.strengths(mem)
+        n_levels = len(self.out_mf)
+        alpha = [[0.0] * n_levels for _ in self.group_names]
+        for (gi, level), s in zip(self.rule_slots, strengths, strict=True):
+            row = alpha[gi]
+            if s > row[level]:
+                row[level] = s
+        activations = dict(zip(self.rule_texts, strengths, strict=True))
+        if self.closed_form:
+            return [self._centroid(row) for row in alpha], activations
+        fears = [1.0] * len(self.group_names)  # fear terms overlapping three or more deep (e.g. Gaussian): dense
+        keys = [(gi, k) for gi, row in enumerate(alpha) for k in range(n_levels) if row[k] > 0.0]
+        if keys:
+            clipped = np.minimum(self.out_mf[[k for _, k in keys]], np.array([alpha[g][k] for g, k in keys])[:, None])
+            starts = [n for n, key in enumerate(keys) if n == 0 or key[0] != keys[n - 1][0]]
             sums = (np.maximum.reduceat(clipped, starts, axis=0) @ self.centroid_w).tolist()
             for n, (area, moment) in zip(starts, sums, strict=True):
                 fears[keys[n][0]] = moment / area if area > 0.0 else 1.0
         return fears, activations
+
+    def _centroid(self, alpha: list[float]) -> float:
+        """Closed-form centroid of one group's aggregated set; 1 when no rule fired."""
+        area = moment = 0.0
+        active: list[int] = []
+        for level, a in enumerate(alpha):
+            if a > 0.0:
+                da, dm = self.level_sums[level](a)
+                area += da
+                moment += dm
+                for other in active:  # overlapping pairs were counted twice: take their min back out
+                    pair = self.pair_table[other][level]
+                    if pair is not None:
+                        b = alpha[other]
+                        da, dm = pair(a if a < b else b)
+                        area -= da
+                        moment -= dm
+                active.append(level)
+        return moment / area if active else 1.0
 
     def evaluate(self, x_raw: np.ndarray) -> FearResult:
         raw = x_raw.tolist()
@@ -154,23 +224,18 @@ class Engine:
             glare, glare_acts = self._infer(x)
             if max(glare) > max(groups):
                 groups, acts = glare, glare_acts
-        group_fears = groups
-        fear = max(group_fears)
-        top = group_fears.index(fear)
-        drivers = sorted(
-            ((text, acts[text], level) for gi, level, _, text, _, _ in self.rules if gi == top and acts[text] > 0.0),
-            key=lambda item: (-item[2], -item[1]),
-        )
+        fear = max(groups)
         cause_fears = dict.fromkeys(Cause, 0.0)
-        for cause, f in zip(self.causes, group_fears, strict=True):
-            cause_fears[cause] = max(cause_fears[cause], f)
+        for cause, f in zip(self.causes, groups, strict=True):
+            if f > cause_fears[cause]:
+                cause_fears[cause] = f
         return FearResult(
             fear=fear,
             level=self.level_of(fear),
             activations=acts,
-            group_fears=dict(zip(self.group_names, group_fears, strict=True)),
+            group_fears=dict(zip(self.group_names, groups, strict=True)),
             cause_fears=cause_fears,
-            drivers=tuple((text, strength) for text, strength, _ in drivers),
+            candidate_drivers=self.group_rules[groups.index(fear)],
         )
 
     # -- vector path -------------------------------------------------------------------------
@@ -187,10 +252,10 @@ class Engine:
         for i, sampled in self.inputs:
             mem[i] = sampled.grades_batch(x[:, i])
         alpha = np.zeros((len(self.group_names) if only is None else 1, len(self.out_mf), len(x)))
-        for gi, level, weight, _, _, vector in self.rules:
+        for (gi, level), s in zip(self.rule_slots, self.strengths_batch(mem), strict=True):
             if only is None or gi == only:
                 row = alpha[gi if only is None else 0, level]
-                np.maximum(row, vector(mem) * weight, out=row)
+                np.maximum(row, s, out=row)
         return alpha
 
     def _infer_block(self, x: np.ndarray, only: int | None) -> np.ndarray:

@@ -103,10 +103,11 @@ def _build(data: Mapping[str, Any], src: _Source) -> RuleBase:
     name = data.get("name", Path(src.path).stem)
     variables_table = _table(data, "variables", src)
     variables: dict[str, Variable] = {}
-    for var_name, table in variables_table.items():
+    for var_name in variables_table:
+        section = f"variables.{var_name}"
         if var_name not in CUE_NAMES:
-            raise src.error(f"unknown variable {var_name!r}; the cues are {', '.join(CUE_NAMES)}", f"variables.{var_name}")
-        variables[var_name] = _variable(var_name, _table(variables_table, var_name, src, f"variables.{var_name}"), src, f"variables.{var_name}")
+            raise src.error(f"unknown variable {var_name!r}; the cues are {', '.join(CUE_NAMES)}", section)
+        variables[var_name] = _variable(var_name, _table(variables_table, var_name, src, section), src, section)
     fear_var = _variable("fear", _table(data, "fear", src), src, "fear")
     if list(fear_var.terms) != list(LEVEL_NAMES):
         raise src.error(f"the fear terms must be exactly {', '.join(LEVEL_NAMES)} in this order, got {', '.join(fear_var.terms)}", "fear")

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
 import skfuzzy
@@ -24,7 +25,7 @@ class Shape:
 
 
 def _sorted(p: Sequence[float]) -> bool:
-    return all(a <= b for a, b in zip(p, p[1:], strict=False))
+    return all(a <= b for a, b in pairwise(p))
 
 
 SHAPES: dict[str, Shape] = {
@@ -44,5 +45,5 @@ SHAPES: dict[str, Shape] = {
 
 def universe_grid(start: float, stop: float, step: float) -> np.ndarray:
     """Uniform sample points from start to stop inclusive (what scikit-fuzzy calls a universe)."""
-    n = int(round((stop - start) / step)) + 1
+    n = round((stop - start) / step) + 1
     return start + step * np.arange(n, dtype=float)
