@@ -140,6 +140,9 @@ def test_a_minimal_rule_base_ignores_cues_it_does_not_use(tmp_path) -> None:
     # nothing fires when far: the (incomplete) rule base answers with the worst fear
     far = rb.evaluate(fg.Cues(0.9, 120.0, 0.0, 3.0, 0.5))
     assert far.fear == 1.0 and far.top_rules() == [] and rb.evaluate_batch(np.array([[0.9, 120.0, 0.0, 3.0, 0.5]]))[0] == 1.0
+    # the same with Gaussian fear terms (dense path)
+    path.write_text(MINIMAL.replace("very_low = { trimf = [0.0, 0.0, 0.25] }", "very_low = { gaussmf = [0.0, 0.1] }"))
+    assert fg.load_rules(path).evaluate(fg.Cues(0.9, 120.0, 0.0, 3.0, 0.5)).fear == 1.0
 
 
 def test_unknown_brightness_takes_the_worse_extreme(write_rules) -> None:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import fearguard as fg
-from fearguard.policy import PolicyConfig, emergency_plan, envelope_speed_mps, imminent_collision, stopping_distance_m
+from fearguard.policy import ModeState, PolicyConfig, emergency_plan, envelope_speed_mps, imminent_collision, stopping_distance_m
 
 CALM = fg.Cues(0.9, 120.0, 0.0, math.inf, 0.5)
 LOST = fg.Cues(0.1, 120.0, 0.9, math.inf, 0.5)  # markings hidden, lane not found: road fear very high
@@ -252,5 +252,21 @@ def test_policy_defaults_are_safe() -> None:
     cfg = PolicyConfig()
     assert cfg.emergency_exit_fear < cfg.emergency_enter_fear and cfg.enter_frames >= 1 and cfg.hold_s > 0
     assert list(cfg.speed_fraction) == sorted(cfg.speed_fraction, reverse=True)
-    plan = emergency_plan({fg.Cause.LOCALISATION: 0.8}, fg.Cause.LOCALISATION, None, 0.0, cfg, fg.VehicleLimits())
+    plan = emergency_plan({fg.Cause.LOCALISATION: 0.8}, ModeState(fg.Mode.EMERGENCY), None, 0.0, cfg, fg.VehicleLimits())
     assert plan.strategy is fg.Strategy.CRAWL and plan.steering_deg is None
+    # nothing latched and nothing active (cannot happen from the mode machine): stop, never a higher cap
+    assert emergency_plan({}, ModeState(fg.Mode.EMERGENCY), None, 1.0, cfg, fg.VehicleLimits()).cap_mps == 0.0
+
+
+def test_a_fault_latches_stop_until_emergency_is_left(rules) -> None:
+    outputs = iter([45.0] + [1.0] * 100)
+    guard = fg.FearGuard(lambda f: next(outputs), rules=rules)
+    assert guard.step(fg.Observation(t_s=0.0, cues=CALM)).strategy is fg.Strategy.STOP
+    held = drive(guard, STALE, 0.1, 1.5)  # localisation alone would crawl, but the fault still latches STOP
+    assert all(c.strategy is fg.Strategy.STOP and c.speed_limit_mps == 0.0 for c in held)
+
+
+def test_emergency_remembers_why_it_braked_during_the_hold(guard) -> None:
+    drive(guard, NEAR, 0.0, 0.3)
+    cmds = drive(guard, STALE, 0.3, 1.0)  # obstacle gone, localisation stale: still the collision STOP
+    assert all(c.strategy is fg.Strategy.STOP for c in cmds)

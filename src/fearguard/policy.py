@@ -175,26 +175,38 @@ class ModeState:
     frames_over: int = 0  # consecutive frames with fear ≥ enter threshold
     entered_s: float | None = None  # when EMERGENCY was entered
     below_since_s: float | None = None  # since when fear is below the exit threshold (in EMERGENCY)
+    latched: frozenset[Cause] = frozenset()  # causes that drove this EMERGENCY; kept until it is left
+    fault: bool = False  # a fault drove this EMERGENCY: stop until it is left
 
 
-def next_mode(state: ModeState, fear: float, t_s: float, at_once: bool, cfg: PolicyConfig) -> tuple[ModeState, str]:
+def next_mode(
+    state: ModeState,
+    fear: float,
+    t_s: float,
+    at_once: bool,
+    cfg: PolicyConfig,
+    causes: frozenset[Cause] = frozenset(),
+    fault: bool = False,
+) -> tuple[ModeState, str]:
     """Advance the mode machine one frame; ``at_once`` (imminent collision, fault) enters immediately.
 
-    Returns the new state and what happened, for the reasons (empty when nothing changed).
+    ``causes`` are this frame's causes over the enter threshold: in EMERGENCY they are latched until it
+    is left, so the emergency plan never forgets why it braked. Returns the new state and what happened.
     """
     over = fear >= cfg.emergency_enter_fear
     if state.mode is Mode.EMERGENCY:
+        latched, faulted = state.latched | causes, state.fault or fault
         if at_once or fear >= cfg.emergency_exit_fear:
-            return ModeState(Mode.EMERGENCY, state.frames_over + over, state.entered_s, None), ""
+            return ModeState(Mode.EMERGENCY, state.frames_over + over, state.entered_s, None, latched, faulted), ""
         below = t_s if state.below_since_s is None else state.below_since_s
         if t_s - below >= cfg.hold_s:
             mode = Mode.CAUTION if fear >= cfg.caution_fear else Mode.NORMAL
             return ModeState(mode), f"left EMERGENCY after {t_s - below:.2f} s below fear {cfg.emergency_exit_fear:.2f}"
-        return ModeState(Mode.EMERGENCY, 0, state.entered_s, below), ""
+        return ModeState(Mode.EMERGENCY, 0, state.entered_s, below, latched, faulted), ""
     frames = state.frames_over + 1 if over else 0
     if at_once or frames >= cfg.enter_frames:
         why = "at once" if at_once else f"after {frames} frames with fear >= {cfg.emergency_enter_fear:.2f}"
-        return ModeState(Mode.EMERGENCY, frames, t_s, None), f"entered EMERGENCY {why}"
+        return ModeState(Mode.EMERGENCY, frames, t_s, None, causes, fault), f"entered EMERGENCY {why}"
     mode = Mode.CAUTION if fear >= cfg.caution_fear else Mode.NORMAL
     return ModeState(mode, frames), ""
 
@@ -219,7 +231,7 @@ class EmergencyPlan:
 
 def emergency_plan(
     cause_fears: Mapping[Cause, float],
-    dominant: Cause,
+    state: ModeState,
     lead: Lead | None,
     held_steering_deg: float,
     cfg: PolicyConfig,
@@ -227,11 +239,13 @@ def emergency_plan(
 ) -> EmergencyPlan:
     """Analyse, then act: every active cause proposes a plan; the one with the lowest cap wins.
 
-    A cause is active when its fear is at or above the exit threshold; the dominant cause always is.
+    Active: latched at or since entry, or now at or above the exit threshold. A cue getting worse can
+    only add causes, so it can only lower the cap: the speed limit stays monotone in every cue.
     """
-    active = [c for c in Cause if c is dominant or cause_fears.get(c, 0.0) >= cfg.emergency_exit_fear]
-    plans = []
-    for cause in active:
+    active = state.latched | {c for c in Cause if cause_fears.get(c, 0.0) >= cfg.emergency_exit_fear}
+    stop = EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg, f"fault: stop, holding {held_steering_deg:+.1f} deg")
+    plans = [stop] if state.fault else []
+    for cause in sorted(active, key=list(Cause).index):
         f = cause_fears.get(cause, 0.0)
         if cause is Cause.COLLISION:
             plans.append(EmergencyPlan(Strategy.STOP, 0.0, None, f"collision risk (fear {f:.2f}): stop"))
@@ -248,7 +262,7 @@ def emergency_plan(
         else:
             cap = cfg.crawl_fraction * vehicle.max_speed_mps
             plans.append(EmergencyPlan(Strategy.CRAWL, cap, None, f"localisation stale (fear {f:.2f}): crawl"))
-    best = min(plans, key=lambda p: (p.cap_mps, _Priority[p.strategy.name].value))
+    best = min(plans, key=lambda p: (p.cap_mps, _Priority[p.strategy.name].value), default=stop)
     road_steer = [p.steering_deg for p in plans if p.steering_deg is not None]
     steering = best.steering_deg if best.steering_deg is not None else (road_steer[0] if road_steer else None)
     return EmergencyPlan(best.strategy, best.cap_mps, steering, best.why)

@@ -163,14 +163,15 @@ class FearGuard:
         speed_now = v.max_speed_mps if speed is None or speed < 0 else speed  # unknown speed: assume the worst
         range_m = self._range_for_policy(cues)
         imminent = imminent_collision(range_m, speed_now, v)
-        st.mode, event = next_mode(st.mode, result.fear, t, imminent, cfg)
+        causes = frozenset(c for c, f in result.cause_fears.items() if f >= cfg.emergency_enter_fear)
+        st.mode, event = next_mode(st.mode, result.fear, t, imminent, cfg, causes | ({Cause.COLLISION} if imminent else set()))
         fear_limit = fear_speed_mps(result.fear, self.rules.level_anchors, cfg, v)
         envelope = envelope_speed_mps(range_m, v)
         target = min(fear_limit, envelope)
         mode, strategy, out_steering = st.mode.mode, Strategy.PASS_THROUGH, steering
         reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {result.dominant_cause.value}"]
         if st.mode.mode is Mode.EMERGENCY:
-            plan = emergency_plan(result.cause_fears, result.dominant_cause, obs.lead, st.trusted_steering_deg, cfg, v)
+            plan = emergency_plan(result.cause_fears, st.mode, obs.lead, st.trusted_steering_deg, cfg, v)
             strategy, target = plan.strategy, min(target, plan.cap_mps)
             if plan.steering_deg is not None:
                 out_steering = plan.steering_deg
@@ -213,10 +214,11 @@ class FearGuard:
         """EMERGENCY/STOP at once, steering held at the last trusted angle; the clock restarts at t."""
         st = self._state
         if t is not None:
-            st.mode, _ = next_mode(st.mode, 1.0, t, True, self.rules.policy)
+            st.mode, _ = next_mode(st.mode, 1.0, t, True, self.rules.policy, fault=True)
             st.last_t_s = t
-        else:
-            st.mode = ModeState(Mode.EMERGENCY, 0, st.mode.entered_s, None)
+        else:  # no usable clock: latch the stop without touching the timers
+            m = st.mode
+            st.mode = ModeState(Mode.EMERGENCY, m.frames_over, m.entered_s, m.below_since_s, m.latched, fault=True)
         st.limit_mps = 0.0
         cues = cues if cues is not None else Cues(*([math.nan] * len(CUE_NAMES)))
         fear = result.fear if result is not None else 1.0
