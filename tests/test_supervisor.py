@@ -266,7 +266,10 @@ def test_a_fault_latches_stop_until_emergency_is_left(rules) -> None:
     assert all(c.strategy is fg.Strategy.STOP and c.speed_limit_mps == 0.0 for c in held)
 
 
-def test_emergency_remembers_why_it_braked_during_the_hold(guard) -> None:
+def test_emergency_remembers_why_it_braked_for_hold_s(guard) -> None:
     drive(guard, NEAR, 0.0, 0.3)
-    cmds = drive(guard, STALE, 0.3, 1.0)  # obstacle gone, localisation stale: still the collision STOP
-    assert all(c.strategy is fg.Strategy.STOP for c in cmds)
+    cmds = drive(guard, STALE, 0.3, 3.0)  # obstacle gone, localisation stale: the collision STOP is kept 2 s
+    strategies = [c.strategy for c in cmds]
+    first_crawl = strategies.index(fg.Strategy.CRAWL)
+    assert set(strategies[:first_crawl]) == {fg.Strategy.STOP} and 0.1 * first_crawl >= 2.0 - 1e-9
+    assert set(strategies[first_crawl:]) == {fg.Strategy.CRAWL}

@@ -163,8 +163,9 @@ class FearGuard:
         speed_now = v.max_speed_mps if speed is None or speed < 0 else speed  # unknown speed: assume the worst
         range_m = self._range_for_policy(cues)
         imminent = imminent_collision(range_m, speed_now, v)
-        causes = frozenset(c for c, f in result.cause_fears.items() if f >= cfg.emergency_enter_fear)
-        st.mode, event = next_mode(st.mode, result.fear, t, imminent, cfg, causes | ({Cause.COLLISION} if imminent else set()))
+        over = frozenset(c for c, f in result.cause_fears.items() if f >= cfg.emergency_enter_fear)
+        over |= {Cause.COLLISION} if imminent else set()
+        st.mode, event = next_mode(st.mode, result.fear, t, imminent, cfg, result.cause_fears, over)
         fear_limit = fear_speed_mps(result.fear, self.rules.level_anchors, cfg, v)
         envelope = envelope_speed_mps(range_m, v)
         target = min(fear_limit, envelope)
