@@ -1,0 +1,35 @@
+"""The public surface DESIGN.md promises: names outside tests call exactly."""
+
+from __future__ import annotations
+
+import dataclasses
+import inspect
+
+import fearguard as fg
+
+
+def test_public_names_are_exported_explicitly() -> None:
+    expected = {"CUE_NAMES", "Cause", "Command", "Cues", "FearGuard", "FearLevel", "FearResult", "FearguardError",
+                "Lead", "Mode", "Observation", "PolicyConfig", "RuleBase", "RuleError", "Strategy", "VehicleLimits",
+                "load_rules"}
+    assert set(fg.__all__) == expected
+    assert all(hasattr(fg, name) for name in fg.__all__)
+
+
+def test_design_contract_signatures() -> None:
+    assert fg.CUE_NAMES == ("lane_confidence", "brightness", "occlusion", "obstacle_range_m", "qr_staleness_s")
+    assert [f.name for f in dataclasses.fields(fg.Cues)] == list(fg.CUE_NAMES)
+    assert [level.value for level in fg.FearLevel] == [0, 1, 2, 3, 4] and fg.FearLevel.VERY_HIGH.name == "VERY_HIGH"
+    assert {m.name for m in fg.Mode} == {"NORMAL", "CAUTION", "EMERGENCY"}
+    assert {s.name for s in fg.Strategy} == {"PASS_THROUGH", "FOLLOW_LEAD", "STOP", "CRAWL"}
+    assert list(inspect.signature(fg.FearGuard).parameters) == ["steer", "rules", "vehicle", "camera"]
+    obs = fg.Observation(t_s=0.0, speed_mps=1.0, frame=None, cues=None, ultrasonic_range_m=None,
+                         odometer_m=None, qr_payload=None, lead=None)
+    cmd = fg.FearGuard(lambda frame: 0.0).step(obs)
+    for name in ("steering_deg", "speed_limit_mps", "mode", "strategy", "fear", "fear_level", "cues", "reasons"):
+        assert hasattr(cmd, name)
+    assert fg.Lead(1.0).range_m is None
+    for name in ("max_speed_mps", "max_decel_mps2", "reaction_time_s", "stop_margin_m", "max_steering_deg"):
+        assert name in {f.name for f in dataclasses.fields(fg.VehicleLimits)}
+    res = fg.load_rules().evaluate(fg.Cues(lane_confidence=.9, brightness=120., occlusion=0., obstacle_range_m=3., qr_staleness_s=.5))
+    assert isinstance(res.fear, float) and isinstance(res.level, fg.FearLevel) and isinstance(res.activations, dict)
