@@ -72,10 +72,6 @@ class Cues:
         """The cues as a float vector in CUE_NAMES order (non-numbers become NaN)."""
         return np.array([_to_float(v) for v in astuple(self)], dtype=float)
 
-    @classmethod
-    def from_array(cls, values: np.ndarray) -> Cues:
-        return cls(*(float(v) for v in values))
-
 
 def _to_float(value: object) -> float:
     if isinstance(value, bool):

@@ -228,5 +228,3 @@ class FearGuard:
         reasons = (why, f"EMERGENCY STOP: fault, holding {held:+.1f} deg")
         return Command(held, 0.0, Mode.EMERGENCY, Strategy.STOP, fear, level, cues, reasons, 0.0, 0.0)
 
-
-__all__ = ["Cause", "Command", "FearGuard", "Observation"]

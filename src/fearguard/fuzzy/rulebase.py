@@ -30,10 +30,6 @@ class Variable:
     shapes: dict[str, tuple[str, tuple[float, ...]]]
     normal_band: tuple[float, float] | None = None
 
-    @property
-    def term_names(self) -> list[str]:
-        return list(self.terms)
-
 
 @dataclass(frozen=True)
 class Rule:
