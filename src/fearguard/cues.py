@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import astuple, dataclass
 from enum import Enum
+from numbers import Real
 
 import numpy as np
 
@@ -68,9 +69,21 @@ class Cues:
     obstacle_range_m: float
     qr_staleness_s: float
 
+    def values(self) -> list[float]:
+        """The cues as floats in CUE_NAMES order (non-numbers become NaN)."""
+        return [_to_float(v) for v in astuple(self)]
+
     def as_array(self) -> np.ndarray:
         """The cues as a float vector in CUE_NAMES order (non-numbers become NaN)."""
-        return np.array([_to_float(v) for v in astuple(self)], dtype=float)
+        return np.array(self.values(), dtype=float)
+
+
+def finite_number(value: object) -> float | None:
+    """A finite real number as float, else None (bools, strings and NaN/inf are not numbers here)."""
+    if isinstance(value, bool) or not isinstance(value, Real):
+        return None
+    f = float(value)
+    return f if math.isfinite(f) else None
 
 
 def _to_float(value: object) -> float:

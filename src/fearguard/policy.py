@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from fearguard.cues import finite_number
 from fearguard.errors import RuleError
 from fearguard.fear import LEVEL_NAMES, Cause
 from fearguard.vehicle import VehicleLimits
@@ -54,12 +55,12 @@ class Lead:
 
     @property
     def usable_range_m(self) -> float | None:
-        r = self.range_m
-        return float(r) if _finite(r) and float(r) >= 0.0 else None  # type: ignore[arg-type]
+        r = finite_number(self.range_m)
+        return r if r is not None and r >= 0.0 else None
 
 
 def _finite(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+    return finite_number(value) is not None
 
 
 @dataclass(frozen=True)

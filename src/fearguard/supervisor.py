@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from numbers import Real
 from typing import Any
 
-from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues
+from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues, finite_number, worst_filled
 from fearguard.fear import Cause, FearLevel, FearResult
 from fearguard.fuzzy.loader import load_rules
 from fearguard.fuzzy.rulebase import RuleBase
@@ -73,14 +73,6 @@ class _State:
     trusted_steering_deg: float = 0.0  # last steering while the road was trusted, held when it is lost
 
 
-def _number(value: object) -> float | None:
-    """A finite real number as float, else None (bools and strings are not numbers here)."""
-    if isinstance(value, bool) or not isinstance(value, Real):
-        return None
-    f = float(value)
-    return f if math.isfinite(f) else None
-
-
 class FearGuard:
     """Fuzzy affective safety supervisor around a steering function (frame → degrees, + = left)."""
 
@@ -112,7 +104,7 @@ class FearGuard:
     def _step(self, obs: Observation) -> Command:
         if not isinstance(obs, Observation):
             return self._fault_command(obs, f"fault: expected an Observation, got {type(obs).__name__}", None)
-        t = _number(obs.t_s)
+        t = finite_number(obs.t_s)
         st = self._state
         if t is None:
             return self._fault_command(obs, f"fault: time t_s={obs.t_s!r} is not a finite number", None)
@@ -129,7 +121,7 @@ class FearGuard:
         """Cues from the observation; absent sensors are neutral, failed or missing ones unknown (worst)."""
         notes: list[str] = []
         if isinstance(obs.cues, Cues):
-            values = obs.cues.as_array().tolist()
+            values = obs.cues.values()
         else:
             values = [math.nan] * len(CUE_NAMES)
             notes.append("no cues given and no perception ran: vision cues unknown (worst)")
@@ -149,7 +141,7 @@ class FearGuard:
             raw = self.steer(obs.frame)
         except Exception as exc:  # the wrapped estimator is foreign code: any failure is a fault
             return 0.0, f"fault: steering function raised {type(exc).__name__}: {exc}"
-        value = _number(raw)
+        value = finite_number(raw)
         if value is None:
             return 0.0, f"fault: steering function returned {raw!r}, not a finite number"
         limit = self.vehicle.max_steering_deg
@@ -159,7 +151,7 @@ class FearGuard:
 
     def _decide(self, obs: Observation, t: float, cues: Cues, result: FearResult, steering: float, notes: list[str]) -> Command:
         st, v, cfg = self._state, self.vehicle, self.rules.policy
-        speed = _number(obs.speed_mps)
+        speed = finite_number(obs.speed_mps)
         speed_now = v.max_speed_mps if speed is None or speed < 0 else speed  # unknown speed: assume the worst
         range_m = self._range_for_policy(cues)
         imminent = imminent_collision(range_m, speed_now, v)
@@ -193,10 +185,10 @@ class FearGuard:
         reasons.extend(notes)
         return Command(out_steering, limit, mode, strategy, result.fear, result.level, cues, tuple(reasons), fear_limit, envelope)
 
-    def _range_for_policy(self, cues: Cues) -> float:
-        """Obstacle range for the envelope: unknown = 0 (worst), inf = nothing ahead."""
-        r = cues.obstacle_range_m
-        return r if isinstance(r, float) and r >= 0.0 else 0.0
+    @staticmethod
+    def _range_for_policy(cues: Cues) -> float:
+        """Obstacle range for the envelope, unknown meaning what it means for fear (worst: 0)."""
+        return worst_filled(cues.values(), 0.0)[0][OBSTACLE_RANGE]
 
     @staticmethod
     def _limit_reason(limit: float, fear_limit: float, envelope: float, target: float, range_m: float) -> str:

@@ -215,8 +215,7 @@ class Engine:
                 active.append(level)
         return moment / area if active else 1.0
 
-    def evaluate(self, x_raw: np.ndarray) -> FearResult:
-        raw = x_raw.tolist()
+    def evaluate(self, raw: list[float]) -> FearResult:
         x, unknown = worst_filled(raw, 0.0)
         groups, acts = self._infer(x)
         if unknown[BRIGHTNESS]:

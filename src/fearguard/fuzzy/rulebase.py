@@ -93,7 +93,7 @@ class RuleBase:
 
     def evaluate(self, cues: Cues | Sequence[float] | np.ndarray) -> FearResult:
         """Fear of one cue vector, with the rules that fired; unknown cues count as their worst."""
-        x = cues.as_array() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(5)
+        x = cues.values() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(5).tolist()
         return self._engine.evaluate(x)  # type: ignore[attr-defined]
 
     def evaluate_batch(self, x: np.ndarray) -> np.ndarray:
