@@ -13,6 +13,15 @@ settings.register_profile("fearguard", derandomize=True, max_examples=150, deadl
 settings.load_profile("fearguard")
 
 RULES_DIR = Path(__file__).resolve().parents[1] / "rules"
+SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"  # real recordings, never copied into the repo
+
+
+@pytest.fixture(scope="session")
+def shared_data() -> Path:
+    """The real recorded data folder (../shared/data); tests using it skip, loudly, only if it is absent."""
+    if not SHARED_DATA.is_dir():
+        pytest.skip(f"real data folder {SHARED_DATA} is absent")
+    return SHARED_DATA
 
 
 @pytest.fixture(scope="session")

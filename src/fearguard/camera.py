@@ -1,0 +1,201 @@
+"""Pinhole camera model: intrinsics, lens distortion and how the camera is mounted on the car.
+
+Image axes: u to the right, v down (pixels). Vehicle axes: x forward, y left, z up (metres).
+The camera sits ``mount_height_m`` above a flat ground, looking forward, pitched down by ``pitch_deg``.
+Used for undistortion, bearings of things in the image, and range to a point on the ground
+(D = H / tan(pitch + arctan((v − cy) / fy)), the model-car paper's formula).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, fields, replace
+from functools import lru_cache
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from fearguard.errors import FearguardError
+
+DEFAULT_HFOV_DEG = 60.0  # [deg] horizontal field of view assumed when no calibration is given
+
+
+class CameraError(FearguardError):
+    """A camera file (TOML) is missing, malformed or physically impossible."""
+
+    def __init__(self, path: str | Path, where: str, problem: str) -> None:
+        self.path, self.where, self.problem = str(path), where, problem
+        super().__init__(f"{self.path}, {where}: {problem}")
+
+
+@dataclass(frozen=True)
+class CameraModel:
+    """Intrinsics (pixels), OpenCV distortion (k1, k2, p1, p2, k3) and mounting (m, deg down)."""
+
+    width_px: int
+    height_px: int
+    fx_px: float
+    fy_px: float
+    cx_px: float
+    cy_px: float
+    distortion: tuple[float, ...] = ()
+    mount_height_m: float | None = None  # None: unknown, so no ground-plane ranges
+    pitch_deg: float = 0.0  # positive = looking down
+    rms_px: float | None = None  # calibration's reprojection error, when calibrated
+
+    def __post_init__(self) -> None:
+        if self.width_px <= 0 or self.height_px <= 0:
+            raise ValueError(f"CameraModel image size must be positive, got {self.width_px}x{self.height_px}")
+        for name in ("fx_px", "fy_px", "cx_px", "cy_px", "pitch_deg"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"CameraModel.{name} must be finite, got {getattr(self, name)!r}")
+        if self.fx_px <= 0 or self.fy_px <= 0:
+            raise ValueError(f"CameraModel focal lengths must be > 0, got fx={self.fx_px}, fy={self.fy_px}")
+        if self.mount_height_m is not None and not (math.isfinite(self.mount_height_m) and self.mount_height_m > 0):
+            raise ValueError(f"CameraModel.mount_height_m must be > 0 or None, got {self.mount_height_m!r}")
+        if not all(math.isfinite(k) for k in self.distortion):
+            raise ValueError(f"CameraModel.distortion must be finite, got {self.distortion!r}")
+
+    @classmethod
+    def default(
+        cls, width_px: int, height_px: int, hfov_deg: float = DEFAULT_HFOV_DEG,
+        mount_height_m: float | None = None, pitch_deg: float = 0.0,
+    ) -> CameraModel:
+        """An uncalibrated camera: square pixels, centred principal point, the given field of view."""
+        f = (width_px / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
+        return cls(width_px, height_px, f, f, width_px / 2.0, height_px / 2.0, (), mount_height_m, pitch_deg)
+
+    def scaled_to(self, width_px: int, height_px: int) -> CameraModel:
+        """The same camera at another resolution (a resized frame): intrinsics scale with the image."""
+        if (width_px, height_px) == (self.width_px, self.height_px):
+            return self
+        sx, sy = width_px / self.width_px, height_px / self.height_px
+        return replace(
+            self, width_px=width_px, height_px=height_px, fx_px=self.fx_px * sx, fy_px=self.fy_px * sy,
+            cx_px=self.cx_px * sx, cy_px=self.cy_px * sy,
+        )
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """The 3×3 intrinsic matrix K."""
+        return np.array([[self.fx_px, 0.0, self.cx_px], [0.0, self.fy_px, self.cy_px], [0.0, 0.0, 1.0]])
+
+    def bearing_deg(self, u_px: float) -> float:
+        """Horizontal angle of image column u from the optical axis (deg, + = left, ISO 8855)."""
+        return -math.degrees(math.atan2(u_px - self.cx_px, self.fx_px))
+
+    def horizon_v_px(self) -> float:
+        """Image row of the horizon (flat ground, far away)."""
+        return self.cy_px - self.fy_px * math.tan(math.radians(self.pitch_deg))
+
+    def ground_range_m(self, v_px: float) -> float | None:
+        """Forward distance to the ground point seen at image row v; None at/above the horizon or if height unknown."""
+        if self.mount_height_m is None:
+            return None
+        angle = math.radians(self.pitch_deg) + math.atan2(v_px - self.cy_px, self.fy_px)
+        if angle <= 1e-6:
+            return None
+        return self.mount_height_m / math.tan(angle)
+
+    def project_ground(self, x_fwd_m: np.ndarray, y_left_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Image (u, v) of ground points in vehicle axes, and a mask of those in front of the camera."""
+        h = self.mount_height_m if self.mount_height_m is not None else 1.0
+        return self.project_points(x_fwd_m, y_left_m, np.zeros_like(np.asarray(x_fwd_m, dtype=float)) - h)
+
+    def project_points(
+        self, x_fwd_m: np.ndarray, y_left_m: np.ndarray, z_up_m: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Image (u, v) of points given relative to the camera centre (vehicle axes), no distortion."""
+        p = math.radians(self.pitch_deg)
+        x, y, z = (np.asarray(a, dtype=float) for a in (x_fwd_m, y_left_m, z_up_m))
+        depth = x * math.cos(p) - z * math.sin(p)
+        down = x * math.sin(p) + (-z) * math.cos(p)
+        front = depth > 1e-6
+        safe = np.where(front, depth, 1.0)
+        u = self.cx_px + self.fx_px * (-y) / safe
+        v = self.cy_px + self.fy_px * down / safe
+        return u, v, front
+
+    def undistort(self, frame: np.ndarray) -> np.ndarray:
+        """The frame with lens distortion removed (same size and intrinsics); unchanged if none."""
+        if not any(self.distortion):
+            return frame
+        h, w = frame.shape[:2]
+        map1, map2 = _undistort_maps(self.scaled_to(w, h))
+        return cv2.remap(frame, map1, map2, cv2.INTER_LINEAR)
+
+
+@lru_cache(maxsize=8)
+def _undistort_maps(camera: CameraModel) -> tuple[np.ndarray, np.ndarray]:
+    """Remap tables, computed once per camera (undistorting a frame is then one cv2.remap)."""
+    size = (camera.width_px, camera.height_px)
+    dist = np.array(camera.distortion, dtype=float)
+    return cv2.initUndistortRectifyMap(camera.matrix, dist, None, camera.matrix, size, cv2.CV_16SC2)
+
+
+# -- camera.toml ------------------------------------------------------------------------------
+_TABLE = "camera"
+
+
+def save_camera(camera: CameraModel, path: str | Path) -> None:
+    """Write ``camera.toml`` (the format ``load_camera`` reads, and ``fearguard calibrate`` writes)."""
+    lines = [f"[{_TABLE}]"]
+    for f in fields(camera):
+        value = getattr(camera, f.name)
+        if value is None:
+            continue
+        if isinstance(value, tuple):
+            lines.append(f"{f.name} = [{', '.join(repr(float(k)) for k in value)}]")
+        elif isinstance(value, int):
+            lines.append(f"{f.name} = {value}")
+        else:
+            lines.append(f"{f.name} = {float(value)!r}")
+    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def load_camera(path: str | Path) -> CameraModel:
+    """Read ``camera.toml``; a wrong file raises CameraError naming the file and the key."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise CameraError(path, "file", f"cannot read it ({exc.strerror}); run `fearguard calibrate` to make one") from exc
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise CameraError(path, "syntax", f"not valid TOML: {exc}") from exc
+    table = data.get(_TABLE)
+    if not isinstance(table, dict):
+        raise CameraError(path, f"[{_TABLE}]", "missing table; expected [camera] with width_px, height_px, fx_px, ...")
+    known = {f.name: f for f in fields(CameraModel)}
+    for key in table:
+        if key not in known:
+            raise CameraError(path, f"{_TABLE}.{key}", f"unknown key; expected one of {', '.join(known)}")
+    kwargs: dict[str, object] = {}
+    for name in known:
+        if name not in table:
+            continue
+        value = table[name]
+        if name == "distortion":
+            if not (isinstance(value, list) and all(_is_number(k) for k in value) and len(value) in (0, 4, 5, 8, 12, 14)):
+                raise CameraError(path, f"{_TABLE}.{name}", f"expected a list of 4, 5, 8, 12 or 14 numbers, got {value!r}")
+            kwargs[name] = tuple(float(k) for k in value)
+        elif name in ("width_px", "height_px"):
+            if not (isinstance(value, int) and not isinstance(value, bool)):
+                raise CameraError(path, f"{_TABLE}.{name}", f"expected an integer, got {value!r}")
+            kwargs[name] = value
+        else:
+            if not _is_number(value):
+                raise CameraError(path, f"{_TABLE}.{name}", f"expected a number, got {value!r}")
+            kwargs[name] = float(value)
+    missing = [n for n in ("width_px", "height_px", "fx_px", "fy_px", "cx_px", "cy_px") if n not in kwargs]
+    if missing:
+        raise CameraError(path, f"[{_TABLE}]", f"missing key(s) {', '.join(missing)}")
+    try:
+        return CameraModel(**kwargs)  # type: ignore[arg-type]
+    except ValueError as exc:
+        raise CameraError(path, f"[{_TABLE}]", str(exc)) from exc
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)

@@ -1,0 +1,1 @@
+"""Vision: per-frame measurements from camera pixels (lanes, exposure, occlusion, lead vehicle, QR)."""
