@@ -5,13 +5,16 @@ from __future__ import annotations
 import dataclasses
 import inspect
 
+import numpy as np
+
 import fearguard as fg
 
 
 def test_public_names_are_exported_explicitly() -> None:
-    expected = {"CUE_NAMES", "Cause", "Command", "Cues", "FearGuard", "FearLevel", "FearResult", "FearguardError",
-                "Lead", "Mode", "Observation", "PolicyConfig", "RuleBase", "RuleError", "Strategy", "VehicleLimits",
-                "load_rules"}
+    expected = {"CUE_NAMES", "CameraModel", "Cause", "Command", "Cues", "FearGuard", "FearLevel", "FearResult",
+                "FearguardError", "FrameAnalysis", "HoughLaneSteering", "Lead", "LeadBox", "Mode", "Observation",
+                "PolicyConfig", "RuleBase", "RuleError", "Strategy", "VehicleLimits", "analyze_frame", "load_camera",
+                "load_rules", "save_camera"}
     assert set(fg.__all__) == expected
     assert all(hasattr(fg, name) for name in fg.__all__)
 
@@ -33,3 +36,14 @@ def test_design_contract_signatures() -> None:
         assert name in {f.name for f in dataclasses.fields(fg.VehicleLimits)}
     res = fg.load_rules().evaluate(fg.Cues(lane_confidence=.9, brightness=120., occlusion=0., obstacle_range_m=3., qr_staleness_s=.5))
     assert isinstance(res.fear, float) and isinstance(res.level, fg.FearLevel) and isinstance(res.activations, dict)
+
+
+def test_analyze_frame_contract() -> None:
+    frame = np.full((240, 320, 3), 90, np.uint8)
+    a = fg.analyze_frame(frame, camera=None)
+    for name in ("lane_confidence", "brightness", "occlusion", "lead", "qr_payloads", "steering_deg"):
+        assert hasattr(a, name)
+    assert isinstance(a.qr_payloads, tuple) and (a.lead is None or isinstance(a.lead, fg.Lead))
+    assert a.steering_deg is None  # a blank grey frame shows no lane
+    steer = fg.HoughLaneSteering()
+    assert isinstance(steer(frame), float)

@@ -1,8 +1,9 @@
 """fearguard: a fuzzy, affective safety supervisor layered on any steering estimator.
 
-cues → fear (fuzzy rules) → policy (speed limit, mode, emergency strategy) → command.
+frame + sensors → perception (cues) → fear (fuzzy rules) → policy (speed limit, mode, emergency strategy) → command.
 """
 
+from fearguard.camera import CameraModel, load_camera, save_camera
 from fearguard.cues import CUE_NAMES, Cues
 from fearguard.errors import FearguardError, RuleError
 from fearguard.fear import Cause, FearLevel, FearResult
@@ -11,9 +12,13 @@ from fearguard.fuzzy.rulebase import RuleBase
 from fearguard.policy import Lead, Mode, PolicyConfig, Strategy
 from fearguard.supervisor import Command, FearGuard, Observation
 from fearguard.vehicle import VehicleLimits
+from fearguard.vision.frame import FrameAnalysis, analyze_frame
+from fearguard.vision.lane_steering import HoughLaneSteering
+from fearguard.vision.lead import LeadBox
 
 __all__ = [
     "CUE_NAMES",
+    "CameraModel",
     "Cause",
     "Command",
     "Cues",
@@ -21,7 +26,10 @@ __all__ = [
     "FearLevel",
     "FearResult",
     "FearguardError",
+    "FrameAnalysis",
+    "HoughLaneSteering",
     "Lead",
+    "LeadBox",
     "Mode",
     "Observation",
     "PolicyConfig",
@@ -29,5 +37,8 @@ __all__ = [
     "RuleError",
     "Strategy",
     "VehicleLimits",
+    "analyze_frame",
+    "load_camera",
     "load_rules",
+    "save_camera",
 ]

@@ -1,6 +1,7 @@
 """FearGuard: wraps a steering function and answers every frame with a safe Command.
 
-Observation → cues → fear (rule base) → policy (speed limit, mode, strategy) → Command.
+Observation → perception (cues) → fear (rule base) → policy (speed limit, mode, strategy) → Command.
+Given ready-made ``cues`` the perception is skipped (cue-level use, no camera needed).
 ``step`` never raises: a fault anywhere (steering function raising or returning garbage, time not
 increasing, a malformed observation) becomes EMERGENCY/STOP with the fault in ``reasons``.
 """
@@ -10,13 +11,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from numbers import Real
 from typing import Any
 
+from fearguard.camera import CameraModel
 from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues, finite_number, worst_filled
 from fearguard.fear import Cause, FearLevel, FearResult
 from fearguard.fuzzy.loader import load_rules
 from fearguard.fuzzy.rulebase import RuleBase
+from fearguard.perception import Perceived, Perception
 from fearguard.policy import (
     Lead,
     Mode,
@@ -30,6 +32,8 @@ from fearguard.policy import (
     rate_limited_mps,
 )
 from fearguard.vehicle import VehicleLimits
+from fearguard.vision.frame import FramePipeline
+from fearguard.vision.lead import LeadBox
 
 SteeringFunction = Callable[[Any], float]
 TOP_RULES_IN_REASONS = 3  # [-] rules quoted in a command's reasons
@@ -46,7 +50,8 @@ class Observation:
     ultrasonic_range_m: float | None = None
     odometer_m: float | None = None
     qr_payload: str | None = None
-    lead: Lead | None = None
+    lead: Lead | LeadBox | None = None  # a Lead, or a box from an external detector (frame pixels)
+    ultrasonic_echo_s: float | None = None  # raw HC-SR04 echo time, used when ultrasonic_range_m is None
 
 
 @dataclass(frozen=True)
@@ -63,6 +68,7 @@ class Command:
     reasons: tuple[str, ...]
     fear_limit_mps: float = math.nan  # the fear-based part of the limit
     envelope_mps: float = math.nan  # the stopping envelope for the obstacle range
+    cause: Cause | None = None  # the cause with the largest share of the fear; None for a fault
 
 
 @dataclass
@@ -81,17 +87,25 @@ class FearGuard:
         steer: SteeringFunction,
         rules: RuleBase | str | None = None,
         vehicle: VehicleLimits | None = None,
-        camera: Any = None,
+        camera: CameraModel | None = None,
     ) -> None:
         self.steer = steer
         self.rules = rules if isinstance(rules, RuleBase) else load_rules(rules)
         self.vehicle = vehicle if vehicle is not None else VehicleLimits()
-        self.camera = camera
+        shared = getattr(steer, "pipeline", None)  # HoughLaneSteering (or a wrapper exposing its pipeline)
+        shared = shared if isinstance(shared, FramePipeline) else None
+        self.camera = camera if camera is not None or shared is None else shared.camera
+        if shared is not None and camera is not None and shared.camera is None:
+            shared.camera = camera  # one camera model for the cues and the wrapped lane steering
+        self.perception = Perception(self.vehicle, self.camera, shared)
+        self.last_perception: Perceived | None = None  # the facts behind the last command (for logs, overlays, benchmarks)
         self._state = _State()
 
     def reset(self) -> None:
-        """Forget all history (mode, timers, speed-limit ramp)."""
+        """Forget all history (mode, timers, speed-limit ramp, trackers)."""
         self._state = _State()
+        self.perception.reset()
+        self.last_perception = None
 
     def step(self, obs: Observation) -> Command:
         """One frame: never raises; any fault becomes a safe command with a reason."""
@@ -110,23 +124,25 @@ class FearGuard:
             return self._fault_command(obs, f"fault: time t_s={obs.t_s!r} is not a finite number", None)
         if st.last_t_s is not None and t <= st.last_t_s:
             return self._fault_command(obs, f"fault: time did not increase ({st.last_t_s:.3f} s → {t:.3f} s)", t)
-        cues, cue_notes = self._cues(obs)
+        cues, cue_notes, facts, lead = self._cues(obs)
         result = self.rules.evaluate(cues)
         steering, steer_fault = self._steering(obs)
         if steer_fault:
             return self._fault_command(obs, steer_fault, t, cues, result)
-        return self._decide(obs, t, cues, result, steering, cue_notes)
+        return self._decide(obs, t, cues, result, steering, cue_notes, facts, lead)
 
-    def _cues(self, obs: Observation) -> tuple[Cues, list[str]]:
-        """Cues from the observation; absent sensors are neutral, failed or missing ones unknown (worst)."""
+    def _cues(self, obs: Observation) -> tuple[Cues, list[str], tuple[str, ...], Lead | None]:
+        """Cues from the observation (given, or measured by perception); absent sensors neutral, failed ones worst."""
         notes: list[str] = []
+        facts: tuple[str, ...] = ()
+        lead = obs.lead if isinstance(obs.lead, Lead) else None
         if isinstance(obs.cues, Cues):
             values = obs.cues.values()
         else:
-            values = [math.nan] * len(CUE_NAMES)
-            notes.append("no cues given and no perception ran: vision cues unknown (worst)")
-            rng = obs.ultrasonic_range_m
-            values[OBSTACLE_RANGE] = float(rng) if isinstance(rng, Real) and not isinstance(rng, bool) else math.nan
+            perceived = self.perception.perceive(obs)
+            self.last_perception = perceived
+            values, lead, facts = perceived.cues.values(), perceived.lead, perceived.facts
+            notes.extend(perceived.alerts)
         if not self.vehicle.has_ultrasonic:
             values[OBSTACLE_RANGE] = math.inf  # no sensor: nothing known in range, declared not faked
         if not self.vehicle.has_qr_localisation:
@@ -134,7 +150,7 @@ class FearGuard:
         for name, v in zip(CUE_NAMES, values, strict=True):
             if not isinstance(v, float) or math.isnan(v):
                 notes.append(f"{name} unknown: counted as its worst value")
-        return Cues(*values), notes
+        return Cues(*values), notes, facts, lead
 
     def _steering(self, obs: Observation) -> tuple[float, str]:
         try:
@@ -149,7 +165,10 @@ class FearGuard:
             return 0.0, f"fault: steering {value:+.1f} deg outside ±{limit:.1f} deg"
         return value, ""
 
-    def _decide(self, obs: Observation, t: float, cues: Cues, result: FearResult, steering: float, notes: list[str]) -> Command:
+    def _decide(
+        self, obs: Observation, t: float, cues: Cues, result: FearResult, steering: float, notes: list[str],
+        facts: tuple[str, ...], lead: Lead | None,
+    ) -> Command:
         st, v, cfg = self._state, self.vehicle, self.rules.policy
         speed = finite_number(obs.speed_mps)
         speed_now = v.max_speed_mps if speed is None or speed < 0 else speed  # unknown speed: assume the worst
@@ -164,7 +183,7 @@ class FearGuard:
         mode, strategy, out_steering = st.mode.mode, Strategy.PASS_THROUGH, steering
         reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {result.dominant_cause.value}"]
         if st.mode.mode is Mode.EMERGENCY:
-            plan = emergency_plan(result.cause_fears, st.mode, obs.lead, st.trusted_steering_deg, cfg, v)
+            plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v)
             strategy, target = plan.strategy, min(target, plan.cap_mps)
             if plan.steering_deg is not None:
                 out_steering = plan.steering_deg
@@ -182,8 +201,11 @@ class FearGuard:
         reasons.append(self._limit_reason(limit, fear_limit, envelope, target, range_m))
         if result.level > FearLevel.VERY_LOW or mode is not Mode.NORMAL:
             reasons.extend(f"rule {text!r} fired {s:.2f}" for text, s in result.top_rules(TOP_RULES_IN_REASONS))
+            reasons.extend(facts)
         reasons.extend(notes)
-        return Command(out_steering, limit, mode, strategy, result.fear, result.level, cues, tuple(reasons), fear_limit, envelope)
+        return Command(
+            out_steering, limit, mode, strategy, result.fear, result.level, cues, tuple(reasons), fear_limit, envelope, result.dominant_cause
+        )
 
     @staticmethod
     def _range_for_policy(cues: Cues) -> float:

@@ -1,0 +1,169 @@
+"""Perception: an Observation (frame + sensor readings) → the five cues, the lead vehicle, and why.
+
+Stateful (trackers and filters live here), but it never decides anything: policy does. Each
+measurement comes from a small module — ``vision/`` for pixels, ``sensors/`` for the ultrasonic and
+QR localisation — and every value that matters is put into ``reasons`` as a fact with its number.
+A sensor the vehicle lacks (``VehicleLimits``) gives a neutral cue; a sensor it has that fails gives
+an unknown (worst) cue.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from numbers import Real
+
+import numpy as np
+
+from fearguard.camera import CameraModel
+from fearguard.cues import Cues
+from fearguard.policy import Lead
+from fearguard.sensors.localisation import LocalisationState, QrLocaliser
+from fearguard.sensors.ultrasonic import RangeEstimate, UltrasonicFilter
+from fearguard.vehicle import VehicleLimits
+from fearguard.vision.frame import FrameAnalysis, FramePipeline
+from fearguard.vision.lead import LeadBox
+
+FROZEN_FRAMES = 3  # [frames] identical frames in a row that mean the camera froze (real sensors always have noise)
+ULTRASONIC_CONE_DEG = 15.0  # [deg] a lead within ±half this bearing is what the ultrasonic sees
+_NAN = math.nan
+
+
+@dataclass(frozen=True)
+class Perceived:
+    """One frame's cues and the facts behind them."""
+
+    cues: Cues
+    lead: Lead | None
+    alerts: tuple[str, ...]  # readings unknown or rejected: always worth reporting
+    facts: tuple[str, ...] = ()  # the measurements behind the cues: reported when fear is up
+    analysis: FrameAnalysis | None = None
+    range_estimate: RangeEstimate | None = None
+    localisation: LocalisationState | None = None
+    timings_ms: dict[str, float] = field(default_factory=dict)
+
+
+def _number(value: object) -> float | None:
+    return float(value) if isinstance(value, Real) and not isinstance(value, bool) else None
+
+
+class Perception:
+    """Frame + sensors → cues. One ``perceive`` per frame, time passed in the Observation."""
+
+    def __init__(
+        self, vehicle: VehicleLimits | None = None, camera: CameraModel | None = None, pipeline: FramePipeline | None = None,
+        marker_spacing_m: float = 5.0,
+    ) -> None:
+        self.vehicle = vehicle if vehicle is not None else VehicleLimits()
+        self.pipeline = pipeline if pipeline is not None else FramePipeline(camera)
+        self.ultrasonic = UltrasonicFilter()
+        self.localiser = QrLocaliser(marker_spacing_m=marker_spacing_m)
+        self._marker_spacing_m = marker_spacing_m
+        self._last_signature: bytes | None = None
+        self._same_frames = 0
+
+    def reset(self) -> None:
+        self.pipeline.reset()
+        self.ultrasonic.reset()
+        self.localiser = QrLocaliser(marker_spacing_m=self._marker_spacing_m)
+        self._last_signature, self._same_frames = None, 0
+
+    def perceive(self, obs: object) -> Perceived:
+        """Cues for one Observation (any object with its fields; missing fields count as missing readings)."""
+        clock = time.perf_counter
+        t0 = clock()
+        t_s = _number(getattr(obs, "t_s", None))
+        t = t_s if t_s is not None else _NAN
+        reasons: list[str] = []  # alerts
+        facts: list[str] = []
+        frame = getattr(obs, "frame", None)
+        given_lead = getattr(obs, "lead", None)
+        box = given_lead if isinstance(given_lead, LeadBox) else None
+        analysis = self._vision(frame, t, box, reasons, facts)
+        lane, brightness, occ = analysis.lane_confidence, analysis.brightness, analysis.occlusion
+        t1 = clock()
+        range_m, estimate = self._range(obs, t, reasons, facts)
+        t2 = clock()
+        staleness, loc = self._staleness(obs, t, analysis.qr_payloads, facts)
+        t3 = clock()
+        lead = given_lead if isinstance(given_lead, Lead) else analysis.lead
+        lead = self._fuse_lead_range(lead, range_m)
+        timings = {f"vision.{k}": v for k, v in analysis.timings_ms.items()}
+        timings.update(vision=(t1 - t0) * 1e3, ultrasonic=(t2 - t1) * 1e3, localisation=(t3 - t2) * 1e3)
+        cues = Cues(lane, brightness, occ, range_m, staleness)
+        return Perceived(cues, lead, tuple(reasons), tuple(facts), analysis, estimate, loc, timings)
+
+    # -- camera ---------------------------------------------------------------------------------
+    def _vision(self, frame: object, t: float, box: LeadBox | None, reasons: list[str], facts: list[str]) -> FrameAnalysis:
+        if frame is None:
+            reasons.append("camera: no frame: vision cues unknown (worst)")
+            return FrameAnalysis(_NAN, _NAN, _NAN, None, (), None)
+        if self._frozen(frame):
+            reasons.append(f"camera: frozen ({self._same_frames} identical frames): vision cues unknown (worst)")
+            return FrameAnalysis(_NAN, _NAN, _NAN, None, (), None)
+        try:
+            analysis = self.pipeline.process(frame, t if math.isfinite(t) else None, box)
+        except Exception as exc:  # vision is a measurement: its failure is an unknown, not a crash
+            reasons.append(f"camera: analysis failed ({type(exc).__name__}: {exc}): vision cues unknown (worst)")
+            return FrameAnalysis(_NAN, _NAN, _NAN, None, (), None)
+        reasons.extend(analysis.reasons)
+        ev, ex = analysis.evidence, analysis.exposure
+        if ev is not None:
+            facts.append(
+                f"lane: confidence {ev.confidence:.2f} (support L {ev.support_left:.2f} R {ev.support_right:.2f}, "
+                f"geometry {ev.geometry:.2f}, agreement {ev.agreement:.2f}, visibility {ev.visibility:.2f})"
+            )
+        if math.isfinite(ex.brightness):
+            facts.append(
+                f"brightness {ex.brightness:.0f}/255 ({100 * ex.saturated_share:.0f} % saturated, {100 * ex.black_share:.0f} % black)"
+            )
+        if math.isfinite(analysis.occlusion):
+            hidden_by = " (vehicle box over the markings)" if analysis.lead_box is not None else ""
+            facts.append(f"occlusion {analysis.occlusion:.2f} of the expected marking region hidden{hidden_by}")
+        return analysis
+
+    def _frozen(self, frame: object) -> bool:
+        """True when this frame is byte-identical (on a sparse grid) to the last FROZEN_FRAMES − 1 ones."""
+        if not isinstance(frame, np.ndarray) or frame.size == 0:
+            self._last_signature, self._same_frames = None, 0
+            return False
+        signature = np.ascontiguousarray(frame[::7, ::7]).tobytes()
+        self._same_frames = self._same_frames + 1 if signature == self._last_signature else 1
+        self._last_signature = signature
+        return self._same_frames >= FROZEN_FRAMES
+
+    # -- ultrasonic -----------------------------------------------------------------------------
+    def _range(self, obs: object, t: float, reasons: list[str], facts: list[str]) -> tuple[float, RangeEstimate | None]:
+        if not self.vehicle.has_ultrasonic:
+            return math.inf, None  # no sensor: nothing known in range, declared not faked
+        est = self.ultrasonic.update(t, getattr(obs, "ultrasonic_range_m", None), getattr(obs, "ultrasonic_echo_s", None))
+        if math.isfinite(est.range_m):
+            ttc = f", TTC {est.ttc_s:.1f} s" if math.isfinite(est.ttc_s) else ""
+            facts.append(f"ultrasonic: obstacle at {est.range_m:.2f} m, closing {est.closing_speed_mps:+.2f} m/s{ttc}")
+        if est.reason and (not est.accepted or math.isnan(est.range_m)):
+            reasons.append(est.reason)
+        return est.range_m, est
+
+    # -- QR localisation -------------------------------------------------------------------------
+    def _staleness(
+        self, obs: object, t: float, seen: tuple[str, ...], reasons: list[str]
+    ) -> tuple[float, LocalisationState | None]:
+        if not self.vehicle.has_qr_localisation:
+            return 0.0, None  # no QR localisation on this car: the cue does not apply
+        payloads = list(seen)
+        given = getattr(obs, "qr_payload", None)
+        if given is not None:
+            payloads.append(given)
+        state = self.localiser.update(t, payloads, _number(getattr(obs, "odometer_m", None)))
+        reasons.extend(state.reasons)
+        return state.staleness_s, state
+
+    @staticmethod
+    def _fuse_lead_range(lead: Lead | None, range_m: float) -> Lead | None:
+        """A lead straight ahead is what the ultrasonic measures: its reading beats ground-plane geometry."""
+        if lead is None or not lead.usable or not math.isfinite(range_m):
+            return lead
+        if abs(lead.bearing_deg) <= ULTRASONIC_CONE_DEG / 2:
+            return Lead(lead.bearing_deg, range_m)
+        return lead

@@ -1,0 +1,98 @@
+"""lane_confidence from evidence: both boundaries, their support, plausible geometry, agreement over time.
+
+    confidence = mean(support_left, support_right) × geometry × agreement × visibility
+
+A side not found contributes 0 support, so one boundary alone gives at most 0.5. ``geometry`` is 1 when the
+lane width at the bottom row and the vanishing point are plausible for a forward camera, falling linearly
+to 0 outside; ``agreement`` (1 without history) compares the detection with the tracked estimate.
+``visibility`` = (1 − occlusion / OCCLUDED_BLIND) × (1 − clipped share / CLIPPED_BLIND): a boundary found on the visible
+part of the road says nothing about the hidden part, and clipped (saturated or black) pixels carry no
+information at all — so washed-out, dark and hidden markings all lower the confidence.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fearguard.vision.lanes import LaneLine, RoadRegion
+
+WIDTH_RANGE = (0.3, 1.6)  # [-] plausible lane width at the region's bottom row, as a share of the image width
+VP_ABOVE_TOP = 0.25  # [-] of the height: the lines may meet at most this far above the region top ...
+VP_BELOW_TOP = 0.04  # [-] ... and at most this far below it (lines crossing on the road are impossible)
+VP_U_RANGE = (0.1, 0.9)  # [-] of the width: where the vanishing point may lie horizontally
+RAMP = 0.1  # [-] of the image size: plausibility falls from 1 to 0 over this distance outside a range
+CLIPPED_BLIND = 0.5  # [-] share of clipped road pixels at which the picture counts as blind
+OCCLUDED_BLIND = 0.8  # [-] occlusion at which the visible rest of the markings no longer vouches for the lane
+AGREEMENT_SCALE = 0.25  # [-] of the lane width: mean disagreement with the track at which agreement reaches 0
+
+
+@dataclass(frozen=True)
+class LaneEvidence:
+    """The factors of lane_confidence, kept for the reasons."""
+
+    confidence: float
+    support_left: float
+    support_right: float
+    geometry: float
+    agreement: float
+    visibility: float
+
+
+def _inside(x: float, lo: float, hi: float, ramp: float) -> float:
+    """1 inside [lo, hi], falling linearly to 0 at ramp outside."""
+    if lo <= x <= hi:
+        return 1.0
+    d = lo - x if x < lo else x - hi
+    return max(0.0, 1.0 - d / ramp)
+
+
+def vanishing_point(left: LaneLine, right: LaneLine) -> tuple[float, float] | None:
+    """Where the two boundaries meet (u, v); None if they are parallel in the image."""
+    den = left.slope - right.slope
+    if abs(den) < 1e-9:
+        return None
+    v = (right.intercept_px - left.intercept_px) / den
+    return left.u_at(v), v
+
+
+def geometry_plausibility(left: LaneLine, right: LaneLine, region: RoadRegion) -> float:
+    """1 when lane width and vanishing point look like a lane seen from a forward camera, else falling to 0."""
+    w, h = region.width_px, region.height_px
+    width = (right.u_at(region.bottom_v_px) - left.u_at(region.bottom_v_px)) / w
+    vp = vanishing_point(left, right)
+    if vp is None or width <= 0:
+        return 0.0
+    vp_u, vp_v = vp[0] / w, (vp[1] - region.top_v_px) / h
+    return min(
+        _inside(width, *WIDTH_RANGE, RAMP),
+        _inside(vp_v, -VP_ABOVE_TOP, VP_BELOW_TOP, RAMP),
+        _inside(vp_u, *VP_U_RANGE, RAMP),
+    )
+
+
+def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadRegion, lane_width_px: float) -> float:
+    """1 when the detected boundary lies on the tracked one, 0 at AGREEMENT_SCALE of a lane width apart."""
+    if measured is None or tracked is None or lane_width_px <= 0:
+        return 1.0
+    rows = (region.top_v_px, region.bottom_v_px)
+    err = sum(abs(measured.u_at(v) - tracked.u_at(v)) for v in rows) / len(rows)
+    return max(0.0, 1.0 - err / (AGREEMENT_SCALE * lane_width_px))
+
+
+def lane_confidence(
+    left: LaneLine | None, right: LaneLine | None, region: RoadRegion, agreement_left: float = 1.0, agreement_right: float = 1.0,
+    occlusion: float = 0.0, clipped_share: float = 0.0,
+) -> LaneEvidence:
+    """Confidence 0..1 in the ego lane's boundaries, with its factors."""
+    s_l = left.support if left is not None else 0.0
+    s_r = right.support if right is not None else 0.0
+    geometry = geometry_plausibility(left, right, region) if left is not None and right is not None else 1.0
+    agree = min(agreement_left if left is not None else 1.0, agreement_right if right is not None else 1.0)
+    visibility = _unit(1.0 - occlusion / OCCLUDED_BLIND) * _unit(1.0 - clipped_share / CLIPPED_BLIND)
+    conf = 0.5 * (s_l + s_r) * geometry * agree * visibility
+    return LaneEvidence(_unit(conf), s_l, s_r, geometry, agree, visibility)
+
+
+def _unit(x: float) -> float:
+    """x clamped to [0, 1]; NaN (unknown) counts as 0."""
+    return float(min(1.0, max(0.0, x))) if x == x else 0.0

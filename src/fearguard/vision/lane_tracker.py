@@ -1,0 +1,123 @@
+"""Temporal tracking of the two lane boundaries with filterpy Kalman filters.
+
+Each boundary is tracked as its image column at the road region's top and bottom rows, with a
+constant-velocity model (state: u_top, u_bottom and their rates, px and px/s). A detection far from
+the prediction (Mahalanobis gate) is treated as a miss, unless it persists ``REINIT_AFTER`` frames,
+which re-initialises the track there (the lane really moved, e.g. a lane change). A track without
+detections is predicted for ``LOST_AFTER_S`` and then dropped.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from filterpy.kalman import KalmanFilter
+
+from fearguard.vision.lanes import LaneLine, RoadRegion
+
+MEASUREMENT_STD = 0.012  # [-] of the width: pixel noise of a detected boundary's end point
+ACCEL_STD = 0.6  # [-] of the width per s²: how fast a boundary may move in the image (curves, steering)
+GATE_CHI2 = 13.8  # [-] chi-square, 2 dof, p = 0.001: detections beyond this are outliers
+REINIT_AFTER = 3  # [frames] consecutive outliers that re-initialise the track
+LOST_AFTER_S = 1.0  # [s] a track without any detection for this long is dropped
+DEFAULT_DT_S = 0.05  # [s] used on the first frame and when time does not advance
+
+
+class BoundaryTrack:
+    """One boundary's Kalman filter over (u_top, u_bottom)."""
+
+    def __init__(self, width_px: int) -> None:
+        self.width_px = width_px
+        self.kf: KalmanFilter | None = None
+        self.last_seen_s = -math.inf
+        self.outliers = 0
+
+    def _new_filter(self, z: np.ndarray) -> KalmanFilter:
+        kf = KalmanFilter(dim_x=4, dim_z=2)
+        kf.x = np.array([z[0], z[1], 0.0, 0.0])
+        kf.H = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]])
+        r = (MEASUREMENT_STD * self.width_px) ** 2
+        kf.R = np.eye(2) * r
+        kf.P = np.diag([r, r, (0.5 * self.width_px) ** 2, (0.5 * self.width_px) ** 2])
+        return kf
+
+    def predict(self, dt_s: float) -> None:
+        if self.kf is None:
+            return
+        self.kf.F = np.array([[1.0, 0, dt_s, 0], [0, 1.0, 0, dt_s], [0, 0, 1.0, 0], [0, 0, 0, 1.0]])
+        q = (ACCEL_STD * self.width_px) ** 2
+        g = np.array([0.5 * dt_s**2, dt_s])
+        block = np.outer(g, g) * q
+        self.kf.Q = np.array([[block[0, 0], 0, block[0, 1], 0], [0, block[0, 0], 0, block[0, 1]],
+                              [block[1, 0], 0, block[1, 1], 0], [0, block[1, 0], 0, block[1, 1]]])
+        self.kf.predict()
+
+    def update(self, t_s: float, z: np.ndarray | None) -> bool:
+        """Fold in a detection (u_top, u_bottom) or a miss; True if the detection was accepted."""
+        if z is None:
+            if t_s - self.last_seen_s > LOST_AFTER_S:
+                self.kf = None
+            return False
+        if self.kf is None:
+            self.kf, self.last_seen_s, self.outliers = self._new_filter(z), t_s, 0
+            return True
+        y = z - self.kf.H @ self.kf.x
+        s = self.kf.H @ self.kf.P @ self.kf.H.T + self.kf.R
+        if float(y @ np.linalg.solve(s, y)) > GATE_CHI2:
+            self.outliers += 1
+            if self.outliers < REINIT_AFTER:
+                if t_s - self.last_seen_s > LOST_AFTER_S:
+                    self.kf = None
+                return False
+            self.kf = self._new_filter(z)
+        else:
+            self.kf.update(z)
+        self.last_seen_s, self.outliers = t_s, 0
+        return True
+
+    def line(self, region: RoadRegion) -> LaneLine | None:
+        """The tracked boundary as a line in the region (support 0: it is an estimate, not evidence)."""
+        if self.kf is None:
+            return None
+        u_top, u_bottom = float(self.kf.x[0]), float(self.kf.x[1])
+        slope = (u_bottom - u_top) / max(1, region.bottom_v_px - region.top_v_px)
+        return LaneLine(slope, u_top - slope * region.top_v_px, 0.0, 0)
+
+
+@dataclass(frozen=True)
+class TrackedLanes:
+    """The tracked boundaries after this frame's update, and whether each detection agreed with its track."""
+
+    left: LaneLine | None
+    right: LaneLine | None
+    left_accepted: bool
+    right_accepted: bool
+    predicted_left: LaneLine | None  # the tracks' prediction before this frame's detections
+    predicted_right: LaneLine | None
+
+
+class LaneTracker:
+    """Left and right boundary tracks; time is passed in (``t_s``), never read from a clock."""
+
+    def __init__(self) -> None:
+        self._tracks: tuple[BoundaryTrack, BoundaryTrack] | None = None
+        self._last_t_s: float | None = None
+
+    def reset(self) -> None:
+        self._tracks, self._last_t_s = None, None
+
+    def update(self, t_s: float, region: RoadRegion, left: LaneLine | None, right: LaneLine | None) -> TrackedLanes:
+        if self._tracks is None or self._tracks[0].width_px != region.width_px:
+            self._tracks = (BoundaryTrack(region.width_px), BoundaryTrack(region.width_px))
+        dt = DEFAULT_DT_S if self._last_t_s is None or not t_s > self._last_t_s else min(1.0, t_s - self._last_t_s)
+        self._last_t_s = t_s if self._last_t_s is None else max(self._last_t_s, t_s)
+        predicted, accepted = [], []
+        for track, line in zip(self._tracks, (left, right), strict=True):
+            track.predict(dt)
+            predicted.append(track.line(region))
+            z = None if line is None else np.array([line.u_at(region.top_v_px), line.u_at(region.bottom_v_px)])
+            accepted.append(track.update(self._last_t_s, z))
+        lt, rt = (t.line(region) for t in self._tracks)
+        return TrackedLanes(lt, rt, accepted[0], accepted[1], predicted[0], predicted[1])

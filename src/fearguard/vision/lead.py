@@ -1,0 +1,157 @@
+"""The vehicle ahead in the ego lane: found by its dark underside, tracked, turned into bearing and range.
+
+Classic cue: whatever its colour, a vehicle casts a dark band on the road under its rear. Pixels much
+darker than the road reference inside the ego lane (widened a little) form connected blobs; a blob as
+wide as a vehicle at that image row (``WIDTH_RANGE`` of the lane width there) with non-road pixels above
+it is a vehicle; its box is the blob's width, ``ASPECT`` × width tall, standing on the blob's bottom row.
+Boxes from an external detector enter as ``LeadBox`` too. Bearing comes from the camera model, range
+from ground-plane geometry (needs the camera's mounting height) — or, when fused, from the ultrasonic.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from filterpy.kalman import KalmanFilter
+
+from fearguard.camera import CameraModel
+from fearguard.policy import Lead
+from fearguard.vision.lanes import LaneLine, RoadRegion
+
+DARK_RATIO = 0.55  # [-] underside pixels are darker than this share of the road reference
+WIDTH_RANGE = (0.3, 1.1)  # [-] blob width as a share of the lane width at its bottom row (a shadow across the road is wider)
+LANE_WIDEN = 0.15  # [-] of the lane width: the search area reaches this far past each boundary
+ASPECT = 0.8  # [-] box height / width of a vehicle's rear
+MAX_ASPECT = 1.3  # [-] a blob taller than this × its width is not a vehicle's rear
+MIN_FILL = 0.35  # [-] blob area / bounding-box area
+ABOVE_FOREIGN_MIN = 0.35  # [-] share of non-road pixels in the box above the underside
+CONFIRM_HITS = 2  # [frames] detections in a row before a new lead is reported
+LOST_AFTER_S = 0.5  # [s] a track coasts this long without detections
+GATE_CHI2 = 16.3  # [-] chi-square, 3 dof, p = 0.001
+
+
+@dataclass(frozen=True)
+class LeadBox:
+    """A vehicle's box in image pixels: left, top, width, height (as detectors report it)."""
+
+    x_px: float
+    y_px: float
+    w_px: float
+    h_px: float
+
+    @property
+    def usable(self) -> bool:
+        vals = (self.x_px, self.y_px, self.w_px, self.h_px)
+        return all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in vals) and self.w_px > 0 < self.h_px
+
+    def scaled(self, factor: float) -> LeadBox:
+        return LeadBox(self.x_px * factor, self.y_px * factor, self.w_px * factor, self.h_px * factor)
+
+    def as_int(self) -> tuple[int, int, int, int]:
+        return int(self.x_px), int(self.y_px), math.ceil(self.w_px), math.ceil(self.h_px)
+
+
+def lead_from_box(box: LeadBox, camera: CameraModel) -> Lead:
+    """Bearing of the box centre and ground-plane range of its bottom edge (None without mounting height)."""
+    return Lead(camera.bearing_deg(box.x_px + 0.5 * box.w_px), camera.ground_range_m(box.y_px + box.h_px))
+
+
+def detect_lead(
+    gray: np.ndarray, hls: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine, reference: float
+) -> LeadBox | None:
+    """The nearest vehicle-like box in the ego lane of a working image, or None."""
+    if not math.isfinite(reference) or reference < 20:
+        return None  # too dark to tell an underside from the road
+    h, w = gray.shape
+    top, bottom = region.top_v_px, region.bottom_v_px
+    rows = np.arange(top, bottom + 1, dtype=float)
+    lu, ru = left.u_at(rows), right.u_at(rows)
+    width = ru - lu
+    if not (width > 0).all():
+        return None
+    lane = np.zeros((h, w), np.uint8)
+    poly = np.concatenate([np.stack([lu - LANE_WIDEN * width, rows], 1), np.stack([ru + LANE_WIDEN * width, rows], 1)[::-1]])
+    cv2.fillPoly(lane, [np.rint(poly).astype(np.int32)], 255)
+    dark = cv2.bitwise_and(cv2.inRange(gray, 0, int(DARK_RATIO * reference)), lane)
+    n, _labels, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
+    best: LeadBox | None = None
+    dev = max(45.0, 0.5 * reference)
+    for i in range(1, n):
+        x, y, bw, bh, area = (int(s) for s in stats[i])
+        v_bottom = y + bh - 1
+        if v_bottom >= bottom - 1 or bh > MAX_ASPECT * bw:
+            continue  # touching the image bottom (our own shadow, a dark road patch) or too tall for a vehicle
+        lane_w = right.u_at(v_bottom) - left.u_at(v_bottom)
+        if lane_w <= 0 or not (WIDTH_RANGE[0] * lane_w <= bw <= WIDTH_RANGE[1] * lane_w) or area < MIN_FILL * bw * bh:
+            continue
+        centre = x + 0.5 * bw
+        if not left.u_at(v_bottom) <= centre <= right.u_at(v_bottom):
+            continue  # the blob's centre is outside the ego lane: a vehicle beside
+        box_h = max(bh, int(ASPECT * bw))
+        y0 = max(0, v_bottom - box_h + 1)
+        y_road = max(y0, top)  # judge "not road" only on the road region (above it: sky and trees are foreign anyway)
+        patch = gray[y_road : v_bottom + 1, x : x + bw].astype(np.float32)
+        sat = hls[y_road : v_bottom + 1, x : x + bw, 2]
+        foreign = (np.abs(patch - reference) > dev) | (sat >= 110)
+        if foreign.mean() < ABOVE_FOREIGN_MIN:
+            continue
+        if best is None or v_bottom > best.y_px + best.h_px - 1:
+            best = LeadBox(float(x), float(y0), float(bw), float(v_bottom - y0 + 1))
+    return best
+
+
+class LeadTracker:
+    """Kalman track of the lead box (centre u, bottom v, width; constant velocity), confirmed after CONFIRM_HITS."""
+
+    def __init__(self) -> None:
+        self.kf: KalmanFilter | None = None
+        self.hits = 0
+        self.last_seen_s = -math.inf
+        self.last_t_s: float | None = None
+
+    def reset(self) -> None:
+        self.__init__()  # type: ignore[misc]
+
+    def update(self, t_s: float, box: LeadBox | None) -> LeadBox | None:
+        """Fold in this frame's box (or None); the confirmed, smoothed box, or None."""
+        dt = 0.05 if self.last_t_s is None or not t_s > self.last_t_s else min(1.0, t_s - self.last_t_s)
+        self.last_t_s = t_s if self.last_t_s is None else max(self.last_t_s, t_s)
+        if self.kf is not None:
+            self.kf.F = np.eye(6)
+            self.kf.F[0, 3] = self.kf.F[1, 4] = self.kf.F[2, 5] = dt
+            self.kf.predict()
+        if box is not None and box.usable:
+            z = np.array([box.x_px + 0.5 * box.w_px, box.y_px + box.h_px, box.w_px])
+            if self.kf is None or self._outlier(z):
+                self.kf, self.hits = self._new(z), 1
+            else:
+                self.kf.update(z)
+                self.hits += 1
+            self.last_seen_s = self.last_t_s
+        elif self.kf is not None and self.last_t_s - self.last_seen_s > LOST_AFTER_S:
+            self.kf, self.hits = None, 0
+        if self.kf is None or self.hits < CONFIRM_HITS:
+            return None
+        u, vb, wd = (float(a) for a in self.kf.x[:3])
+        hd = ASPECT * wd
+        return LeadBox(u - 0.5 * wd, vb - hd, wd, hd)
+
+    def _outlier(self, z: np.ndarray) -> bool:
+        kf = self.kf
+        y = z - kf.H @ kf.x
+        s = kf.H @ kf.P @ kf.H.T + kf.R
+        return float(y @ np.linalg.solve(s, y)) > GATE_CHI2
+
+    @staticmethod
+    def _new(z: np.ndarray) -> KalmanFilter:
+        kf = KalmanFilter(dim_x=6, dim_z=3)
+        kf.x = np.array([z[0], z[1], z[2], 0.0, 0.0, 0.0])
+        kf.H = np.hstack([np.eye(3), np.zeros((3, 3))])
+        scale = max(4.0, 0.1 * z[2])
+        kf.R = np.eye(3) * scale**2
+        kf.P = np.diag([scale**2] * 3 + [(4 * z[2]) ** 2] * 3)
+        kf.Q = np.diag([1.0, 1.0, 1.0, 25.0, 25.0, 25.0]) * (0.2 * z[2]) ** 2 * 0.05
+        return kf

@@ -1,0 +1,54 @@
+"""Baseline steering from the lane geometry, and HoughLaneSteering: a steering function users can wrap.
+
+The lane centre at a look-ahead row (``LOOKAHEAD`` of the road region from its top) is the aim point;
+the steering angle is its bearing through the camera model (deg, + = left): the direction a
+pure-pursuit driver would head for. One boundary: the centre is half the remembered lane width from
+it. No boundary: the previous angle is kept (the review's rule); without history there is no angle.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fearguard.camera import CameraModel
+from fearguard.vision.lanes import LaneLine, RoadRegion
+
+LOOKAHEAD = 0.3  # [-] of the road region's height, from its top: the row the car aims at
+DEFAULT_LANE_WIDTH = 0.45  # [-] of the image width: lane width at the look-ahead row before any was measured
+WIDTH_MEMORY = 0.1  # [-] EMA weight of a new lane-width measurement
+
+
+def lookahead_row(region: RoadRegion) -> float:
+    return region.top_v_px + LOOKAHEAD * (region.bottom_v_px - region.top_v_px)
+
+
+def aim_point_u(left: LaneLine | None, right: LaneLine | None, v_px: float, lane_width_px: float) -> float | None:
+    """Column of the lane centre at row v: between both boundaries, or half a lane width from one."""
+    if left is not None and right is not None:
+        return 0.5 * (left.u_at(v_px) + right.u_at(v_px))
+    if left is not None:
+        return left.u_at(v_px) + 0.5 * lane_width_px
+    if right is not None:
+        return right.u_at(v_px) - 0.5 * lane_width_px
+    return None
+
+
+def steering_from_aim(u_work_px: float, scale: float, camera: CameraModel) -> float:
+    """Bearing (deg, + = left) of the aim point, given in working pixels (× scale → frame pixels)."""
+    return camera.bearing_deg(u_work_px * scale)
+
+
+@dataclass
+class LaneMemory:
+    """What the steering keeps between frames: the lane width at the look-ahead row and the last angle."""
+
+    lane_width_px: float | None = None
+    last_steering_deg: float | None = None
+
+    def remember_width(self, left: LaneLine | None, right: LaneLine | None, v_px: float, width_px: int) -> float:
+        if left is not None and right is not None:
+            measured = right.u_at(v_px) - left.u_at(v_px)
+            if measured > 0:
+                old = self.lane_width_px
+                self.lane_width_px = measured if old is None else (1 - WIDTH_MEMORY) * old + WIDTH_MEMORY * measured
+        return self.lane_width_px if self.lane_width_px is not None else DEFAULT_LANE_WIDTH * width_px
