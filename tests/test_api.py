@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import dataclasses
 import inspect
+from pathlib import Path
 
 import numpy as np
+import pytest
 
 import fearguard as fg
 
@@ -47,3 +49,17 @@ def test_analyze_frame_contract() -> None:
     assert a.steering_deg is None  # a blank grey frame shows no lane
     steer = fg.HoughLaneSteering()
     assert isinstance(steer(frame), float)
+
+
+def test_camera_projection_and_its_inverse_agree(tmp_path: Path) -> None:
+    cam = fg.CameraModel.default(320, 240, hfov_deg=62.2, mount_height_m=0.15, pitch_deg=13.0)
+    for ahead_m, left_m in ((0.5, 0.0), (1.0, 0.2), (3.0, -0.3)):
+        u, v, front = cam.project_ground(np.array([ahead_m]), np.array([left_m]))
+        assert front[0]
+        assert cam.ground_range_m(float(v[0])) == pytest.approx(ahead_m, rel=1e-9)
+        assert np.sign(cam.bearing_deg(float(u[0]))) == np.sign(left_m)
+    _, far_v, _ = cam.project_ground(np.array([1e7]), np.array([0.0]))
+    assert float(far_v[0]) == pytest.approx(cam.horizon_v_px(), abs=1e-3)
+    path = tmp_path / "camera.toml"
+    fg.save_camera(cam, path)
+    assert fg.load_camera(path) == cam

@@ -208,12 +208,15 @@ def test_nan_cue_is_worst_and_said_so(guard) -> None:
     assert "occlusion unknown: counted as its worst value" in cmd.reasons
 
 
-def test_without_cues_vision_is_unknown_and_ultrasonic_fills_the_range(guard) -> None:
+def test_without_a_frame_vision_is_unknown_and_ultrasonic_fills_the_range(guard) -> None:
     cmd = guard.step(fg.Observation(t_s=0.0, speed_mps=0.0, ultrasonic_range_m=1.2))
     assert cmd.cues.obstacle_range_m == 1.2 and math.isnan(cmd.cues.lane_confidence)
-    assert cmd.fear_level is fg.FearLevel.VERY_HIGH and any("no perception ran" in r for r in cmd.reasons)
-    garbage = guard.step(fg.Observation(t_s=0.1, ultrasonic_range_m="far"))
-    assert math.isnan(garbage.cues.obstacle_range_m)
+    assert cmd.fear_level is fg.FearLevel.VERY_HIGH and any("camera: no frame" in r for r in cmd.reasons)
+    bridged = guard.step(fg.Observation(t_s=0.1, ultrasonic_range_m="far"))  # one garbage reading: the filter bridges it
+    assert bridged.cues.obstacle_range_m == pytest.approx(1.2, abs=0.05)
+    garbage = [guard.step(fg.Observation(t_s=0.1 * k, ultrasonic_range_m="far")) for k in range(2, 6)]
+    assert math.isnan(garbage[-1].cues.obstacle_range_m)  # garbage for longer than the hold: unknown (worst)
+    assert any("ultrasonic" in r for r in garbage[-1].reasons)
 
 
 def test_absent_sensors_are_neutral_not_worst(rules) -> None:

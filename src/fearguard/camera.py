@@ -111,7 +111,7 @@ class CameraModel:
         p = math.radians(self.pitch_deg)
         x, y, z = (np.asarray(a, dtype=float) for a in (x_fwd_m, y_left_m, z_up_m))
         depth = x * math.cos(p) - z * math.sin(p)
-        down = x * math.sin(p) + (-z) * math.cos(p)
+        down = -x * math.sin(p) - z * math.cos(p)
         front = depth > 1e-6
         safe = np.where(front, depth, 1.0)
         u = self.cx_px + self.fx_px * (-y) / safe

@@ -1,4 +1,4 @@
-"""Command line: ``fearguard demo``, ``fearguard rules check|plot|explain``.
+"""Command line: ``fearguard demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``suite``.
 
 A thin layer: it parses arguments, calls the library, prints, and maps errors to exit codes
 (0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr).
@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import time
 from collections.abc import Sequence
 
 from fearguard.cues import CUE_NAMES, Cues
@@ -88,6 +89,145 @@ def cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    """Chessboard photos → camera.toml: found/missed per image, the RMS reprojection error, the intrinsics."""
+    from pathlib import Path
+
+    from fearguard.calibration import CalibrationError, calibrate_chessboard, expand_image_paths, parse_pattern
+    from fearguard.camera import save_camera
+
+    pattern = parse_pattern(args.pattern)
+    paths = expand_image_paths(args.images)
+    result = calibrate_chessboard(paths, pattern, args.square_m, args.mount_height_m, args.pitch_deg)
+    lines = {p: f"found   {e:.2f} px" for p, e in zip(result.found, result.per_image_error_px, strict=True)}
+    lines |= {p: f"missed  {why}" for p, why in zip(result.missed, result.missed_reasons, strict=True)}
+    width = max(len(p.name) for p in paths)
+    for path in dict.fromkeys(paths):
+        print(f"{path.name:<{width}}  {lines[path]}")
+    for note in result.notes:
+        print(f"note: {note}")
+    cam = result.camera
+    print(f"board found in {len(result.found)} of {len(lines)} images; RMS reprojection error {result.rms_px:.3f} px")
+    dist = " ".join(f"{k} {v:+.4f}" for k, v in zip(("k1", "k2", "p1", "p2", "k3"), cam.distortion, strict=False))
+    print(f"camera {cam.width_px}x{cam.height_px}: fx {cam.fx_px:.1f} fy {cam.fy_px:.1f} cx {cam.cx_px:.1f} cy {cam.cy_px:.1f} px; {dist}")
+    try:
+        save_camera(cam, args.out)
+    except OSError as exc:
+        raise CalibrationError(f"--out {args.out}: cannot write it ({exc.strerror}); choose a writable path") from exc
+    print(f"wrote {Path(args.out)}")
+    return 0
+
+
+class _Progress:
+    """A rich progress bar with frames/s on stderr (quiet when stderr is not a terminal)."""
+
+    def __init__(self, label: str) -> None:
+        from rich.console import Console
+        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+
+        console = Console(stderr=True)
+        self._bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[fps]}"),
+                             TimeRemainingColumn(), console=console, disable=not console.is_terminal, transient=False)
+        self._task = self._bar.add_task(label, total=None, fps="")
+        self._start = time.perf_counter()
+
+    def __enter__(self) -> _Progress:
+        self._bar.__enter__()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._bar.__exit__(None, None, None)
+
+    def update(self, done: int, total: int | None) -> None:
+        elapsed = time.perf_counter() - self._start
+        fps = f"{done / elapsed:.0f} frames/s" if elapsed > 0 else ""
+        self._bar.update(self._task, completed=done, total=total, fps=fps)
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    """A recorded drive → log.jsonl, summary.json, timeline.png (and annotated.mp4): where and why fear rose."""
+    from fearguard.replay.run import ReplayOptions, replay
+
+    options = ReplayOptions(
+        rules=args.rules, camera=args.camera, sensor_log=args.sensor_log, strict=args.strict, no_ultrasonic=args.no_ultrasonic,
+        qr_localisation=args.qr_localisation, speed_mps=args.speed_mps, fps=args.fps, start=args.from_, stop=args.to,
+        every=args.every, video=args.video, plots=not args.no_plots,
+    )
+    with _Progress("replay") as progress:
+        result = replay(args.recording, args.out, options, on_frame=progress.update)
+    _print_replay_summary(result.summary, result.out_dir)
+    return 130 if result.interrupted else 0
+
+
+def _print_replay_summary(summary: dict, out_dir: object) -> None:
+    levels = summary.get("fear_level_share", {})
+    modes = summary.get("mode_share", {})
+    fps = summary.get("processing_fps")
+    print(f"frames {summary.get('processed_frames', 0)} of {summary.get('expected_frames')} "
+          f"({fps:.0f} frames/s)" if fps else f"frames {summary.get('processed_frames', 0)}")
+    print("fear level  " + "  ".join(f"{k} {100 * v:.0f}%" for k, v in levels.items()))
+    print("mode        " + "  ".join(f"{k} {100 * v:.0f}%" for k, v in modes.items()))
+    episodes = summary.get("emergency_episodes", [])
+    print(f"emergency episodes: {len(episodes)}")
+    for ep in episodes[:10]:
+        print(f"  {ep['start_t_s']:.2f}–{ep['end_t_s']:.2f} s  cause {ep['cause']}  {'; '.join(ep.get('first_reasons', [])[:2])}")
+    for st in summary.get("elevated_fear", [])[:10]:
+        print(f"  fear ≥ MEDIUM {st['start_t_s']:.2f}–{st['end_t_s']:.2f} s, peak {st['peak_fear']:.2f}: {'; '.join(st.get('why', []))}")
+    if summary.get("stopped_early"):
+        print(f"note: {summary['stopped_early']}")
+    if summary.get("skipped"):
+        print(f"note: {len(summary['skipped'])} frame(s) skipped, first: {summary['skipped'][0]['reason']}")
+    for issue in summary.get("sensor_log_issues", [])[:10]:
+        print(f"sensor log line {issue['line']}: {issue['problem']} (skipped)")
+    if summary.get("interrupted"):
+        print("interrupted: the log holds every frame processed so far")
+    print(f"wrote {out_dir}/log.jsonl, summary.json" + (", timeline.png" if summary.get("frames") else ""))
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """One scenario closed loop → log.jsonl, summary.json, plots (and annotated.mp4); exit 1 if an expectation fails."""
+    from pathlib import Path
+
+    from fearguard.sim.scenario import load_scenario
+    from fearguard.sim.suite import run_to_folder
+
+    scenario = load_scenario(args.scenario)
+    controller = "unguarded" if args.unguarded else (args.baseline or "guarded")
+    with _Progress(scenario.name) as progress:
+        result = run_to_folder(scenario, Path(args.out), args.seed, controller, args.video, progress.update)
+    s = result.summary
+    print(f"{scenario.name} ({controller}, seed {result.seed}): {result.frames} frames, {s.get('distance_m', 0):.1f} m, "
+          f"mean speed {s.get('mean_speed_mps', 0):.2f} m/s, collisions {s.get('collisions')}, lane departures {s.get('lane_departures')}, "
+          f"emergency entries {s.get('emergency_entries')}")
+    for e in result.expectations:
+        print(f"  {'ok  ' if e['ok'] else 'FAIL'} {e['name']}: {e['detail']}")
+    print(f"wrote {args.out}/log.jsonl, summary.json, timeline/trajectory plots" + (", annotated.mp4" if args.video else ""))
+    if result.interrupted:
+        return 130
+    return 0 if result.passed else 1
+
+
+def cmd_suite(args: argparse.Namespace) -> int:
+    """Every scenario guarded and with the baselines → a comparison table (markdown + JSON); exit 1 if guarded fails."""
+    import json
+    from pathlib import Path
+
+    from fearguard.sim.suite import run_suite, scenario_files, suite_markdown, suite_table
+
+    files = scenario_files(args.folder)
+    if not files:
+        raise FearguardError(f"suite: no *.toml scenarios in {args.folder}; give a folder of scenario files")
+    rows = run_suite(files, args.seeds, on_run=print if args.verbose else None)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    markdown = suite_markdown(rows)
+    (out / "suite.md").write_text(markdown, encoding="utf-8")
+    (out / "suite.json").write_text(json.dumps({"runs": rows, "table": suite_table(rows)}, indent=2) + "\n", encoding="utf-8")
+    print(markdown)
+    print(f"wrote {out}/suite.md, suite.json")
+    return 0 if all(r["passed"] for r in rows if r["controller"] == "guarded") else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fearguard", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -110,6 +250,46 @@ def build_parser() -> argparse.ArgumentParser:
     explain.add_argument("--lead-range", type=float, default=None, help="its range (m)")
     explain.add_argument("--top", type=int, default=3, help="how many rules to show")
     explain.set_defaults(func=cmd_explain)
+    calibrate = sub.add_parser("calibrate", help="camera intrinsics and distortion from chessboard photos → camera.toml")
+    calibrate.add_argument("images", nargs="*", help="chessboard photos, or folders of *.jpg/*.png")
+    calibrate.add_argument("--pattern", default="9x6", help="inner corners COLSxROWS (default 9x6: a board of 10×7 squares)")
+    calibrate.add_argument("--square-m", type=float, default=1.0, help="side of one square in metres (does not change the intrinsics)")
+    calibrate.add_argument("--mount-height-m", type=float, default=None, help="camera height above the ground (m), for ground ranges")
+    calibrate.add_argument("--pitch-deg", type=float, default=0.0, help="camera pitch, positive = looking down (deg)")
+    calibrate.add_argument("--out", required=True, help="camera file to write (TOML), e.g. camera.toml")
+    calibrate.set_defaults(func=cmd_calibrate)
+    rp = sub.add_parser("replay", help="a recorded drive (video, image folder, Donkey tub) through the supervisor, open loop")
+    rp.add_argument("recording", help="video file, folder of images, or Donkey Car tub folder")
+    rp.add_argument("--out", required=True, help="output folder (log.jsonl, summary.json, timeline.png, annotated.mp4)")
+    rp.add_argument("--sensor-log", default=None, help="CSV or JSON Lines with t_s and sensor columns, aligned by time")
+    rp.add_argument("--strict", action="store_true", help="reject a sensor log with any malformed line (default: report and skip)")
+    rp.add_argument("--camera", default=None, help="camera.toml from `fearguard calibrate`")
+    rp.add_argument("--rules", default=None, help="rule file (default: the bundled model-car rules)")
+    rp.add_argument("--no-ultrasonic", action="store_true", help="the car has no ultrasonic (even if the log has a column)")
+    rp.add_argument("--qr-localisation", action="store_true", help="the car localises with QR markers (scan frames, staleness cue)")
+    rp.add_argument("--speed-mps", type=float, default=None, help="the recording's speed when the log has none (default: unknown)")
+    rp.add_argument("--fps", type=float, default=None, help="frame rate of an image folder (or to override a video's)")
+    rp.add_argument("--from", dest="from_", default=None, help="start: seconds ('12.5s') or a frame ('300f')")
+    rp.add_argument("--to", default=None, help="end (exclusive): seconds or a frame")
+    rp.add_argument("--every", type=int, default=1, help="process every N-th frame")
+    rp.add_argument("--video", action="store_true", help="also write annotated.mp4")
+    rp.add_argument("--no-plots", action="store_true", help="skip timeline.png")
+    rp.set_defaults(func=cmd_replay)
+    run = sub.add_parser("run", help="one scenario closed loop: rendered frames → perception → supervisor → car")
+    run.add_argument("scenario", help="scenario file (TOML), e.g. scenarios/night.toml")
+    run.add_argument("--seed", type=int, default=None, help="random seed (default: the scenario's)")
+    who = run.add_mutually_exclusive_group()
+    who.add_argument("--unguarded", action="store_true", help="no supervisor: cruise speed, the estimator alone")
+    who.add_argument("--baseline", choices=("unguarded", "crisp", "aeb"), default=None, help="a baseline speed rule instead of fearguard")
+    run.add_argument("--out", required=True, help="output folder")
+    run.add_argument("--video", action="store_true", help="also write annotated.mp4")
+    run.set_defaults(func=cmd_run)
+    suite = sub.add_parser("suite", help="every scenario guarded and with the baselines: a comparison table")
+    suite.add_argument("folder", nargs="?", default=None, help="folder of scenario files (default: the bundled library)")
+    suite.add_argument("--seeds", type=int, default=10, help="seeds per scenario (default 10)")
+    suite.add_argument("--out", required=True, help="output folder for suite.md and suite.json")
+    suite.add_argument("--verbose", action="store_true", help="print each run as it finishes")
+    suite.set_defaults(func=cmd_suite)
     return parser
 
 

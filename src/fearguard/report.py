@@ -107,7 +107,8 @@ def episodes(records: Sequence[Mapping[str, Any]], mode: str = "EMERGENCY") -> l
     for r in records:
         if r.get("mode") == mode:
             if current is None:
-                current = {"start_frame": r["frame"], "start_t_s": r["t_s"], "causes": {}, "strategies": {}, "min_speed_limit_mps": math.inf}
+                current = {"start_frame": r["frame"], "start_t_s": r["t_s"], "causes": {}, "strategies": {},
+                           "min_speed_limit_mps": math.inf}
                 found.append(current)
             current["end_frame"], current["end_t_s"] = r["frame"], r["t_s"]
             for key, field in (("causes", "cause"), ("strategies", "strategy")):

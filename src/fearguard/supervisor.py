@@ -204,7 +204,8 @@ class FearGuard:
             reasons.extend(facts)
         reasons.extend(notes)
         return Command(
-            out_steering, limit, mode, strategy, result.fear, result.level, cues, tuple(reasons), fear_limit, envelope, result.dominant_cause
+            out_steering, limit, mode, strategy, result.fear, result.level, cues, tuple(reasons), fear_limit, envelope,
+            result.dominant_cause,
         )
 
     @staticmethod

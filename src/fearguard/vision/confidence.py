@@ -3,7 +3,7 @@
     confidence = mean(support_left, support_right) × geometry × agreement × visibility
 
 A side not found contributes 0 support, so one boundary alone gives at most 0.5. ``geometry`` is 1 when the
-lane width at the bottom row and the vanishing point are plausible for a forward camera, falling linearly
+lane width at the region's middle row and the vanishing point are plausible for a forward camera, falling linearly
 to 0 outside; ``agreement`` (1 without history) compares the detection with the tracked estimate.
 ``visibility`` = (1 − occlusion / OCCLUDED_BLIND) × (1 − clipped share / CLIPPED_BLIND): a boundary found on the visible
 part of the road says nothing about the hidden part, and clipped (saturated or black) pixels carry no
@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from fearguard.vision.lanes import LaneLine, RoadRegion
 
-WIDTH_RANGE = (0.3, 1.6)  # [-] plausible lane width at the region's bottom row, as a share of the image width
+WIDTH_RANGE = (0.15, 1.6)  # [-] plausible lane width at the region's middle row, as a share of the image width
 VP_ABOVE_TOP = 0.25  # [-] of the height: the lines may meet at most this far above the region top ...
 VP_BELOW_TOP = 0.04  # [-] ... and at most this far below it (lines crossing on the road are impossible)
 VP_U_RANGE = (0.1, 0.9)  # [-] of the width: where the vanishing point may lie horizontally
@@ -58,7 +58,8 @@ def vanishing_point(left: LaneLine, right: LaneLine) -> tuple[float, float] | No
 def geometry_plausibility(left: LaneLine, right: LaneLine, region: RoadRegion) -> float:
     """1 when lane width and vanishing point look like a lane seen from a forward camera, else falling to 0."""
     w, h = region.width_px, region.height_px
-    width = (right.u_at(region.bottom_v_px) - left.u_at(region.bottom_v_px)) / w
+    mid = 0.5 * (region.top_v_px + region.bottom_v_px)
+    width = (right.u_at(mid) - left.u_at(mid)) / w
     vp = vanishing_point(left, right)
     if vp is None or width <= 0:
         return 0.0

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -28,6 +29,7 @@ from fearguard.vision.occlusion import default_lines, occlusion, road_reference
 from fearguard.vision.qr import detect_qr
 from fearguard.vision.steering import LaneMemory, aim_point_u, lookahead_row, steering_from_aim
 
+CONFIDENCE_MEDIAN_FRAMES = 3  # [frames] lane_confidence over time is the median of this many frames (50 ms lag at 20 Hz)
 MIN_FRAME_PX = 16  # [px] frames smaller than this on a side cannot show a road
 _NAN = float("nan")
 UNKNOWN_EXPOSURE = Exposure(_NAN, _NAN, _NAN)
@@ -94,6 +96,12 @@ class FramePipeline:
         self._frames = 0
         self._last: tuple[int, FrameAnalysis] | None = None
         self._last_frame: np.ndarray | None = None
+        self._confidences: deque[float] = deque(maxlen=CONFIDENCE_MEDIAN_FRAMES)
+
+    def steady_confidence(self, confidence: float) -> float:
+        """Median of the last CONFIDENCE_MEDIAN_FRAMES confidences: one odd frame neither alarms nor reassures."""
+        self._confidences.append(confidence)
+        return float(np.median(self._confidences))
 
     def reset(self) -> None:
         self.__init__(self.camera, 1.0 / self.period_s, self.qr)  # type: ignore[misc]
@@ -182,8 +190,9 @@ def _analyze(
         reasons.append("camera: road region empty: brightness unknown")
     timings = {"prepare": (t1 - t0) * 1e3, "lanes": (t2 - t1) * 1e3, "confidence": (t3 - t2) * 1e3,
                "lead_occlusion": (t4 - t3) * 1e3, "qr": (t5 - t4) * 1e3, "steering": (clock() - t5) * 1e3}
+    confidence = evidence.confidence if state is None else state.steady_confidence(evidence.confidence)
     return FrameAnalysis(
-        evidence.confidence, exposure.brightness, occ, lead, payloads, steering, exposure, evidence, left, right, region,
+        confidence, exposure.brightness, occ, lead, payloads, steering, exposure, evidence, left, right, region,
         scale, box, reference, tuple(reasons), timings,
     )
 

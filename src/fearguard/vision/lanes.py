@@ -24,8 +24,12 @@ from fearguard.camera import CameraModel
 WORK_WIDTH_PX = 320  # [px] frames are analysed at this width (aspect kept): the cost is then fixed
 TOP_FRACTION = 0.62  # [-] road region starts at this share of the height without a camera model (dash-cam horizon ≈ 0.58)
 BOTTOM_FRACTION = 0.93  # [-] and ends here (many dash-cams see their own bonnet below)
+SIDE_FRACTION = 0.75  # [-] of the road region's height: with a camera model, the near part searched across the full width
 HORIZON_MARGIN = 0.04  # [-] with a camera model the region starts this share of the height below the horizon
-TOPHAT_WIDTH = 0.055  # [-] top-hat window as a share of the width: wider than a near marking, narrower than the lane
+TOPHAT_WIDTH = 0.055  # [-] top-hat window as a share of the width: wider than a far marking, narrower than a far lane
+NEAR_TOPHAT_WIDTH = 0.2  # [-] the same in the near half of the road region (a dash-cam's near marking: ~10 px)
+TOPHAT_WIDTH_PITCHED = 0.12  # [-] far window with a camera model: a low camera pitched down sees wide tape ...
+NEAR_TOPHAT_WIDTH_PITCHED = 0.35  # [-] ... and near window (a model car's tape: ~60 px across there)
 RIDGE_MIN = 22  # [grey levels] a marking must be this much brighter than the road beside it
 YELLOW_HUE = (14, 40)  # [OpenCV hue 0..180] yellow paint
 YELLOW_SAT_MIN = 70  # [0..255] saturation of yellow paint
@@ -50,6 +54,8 @@ class RoadRegion:
     top_v_px: int
     bottom_v_px: int
     polygon_px: tuple[tuple[int, int], ...]
+    far_tophat: float = 0.055  # [-] of the width: top-hat window in the far half of the region
+    near_tophat: float = 0.2  # [-] of the width: top-hat window in the near half (markings are widest there)
 
 
 @dataclass(frozen=True)
@@ -91,8 +97,13 @@ def road_region(width_px: int, height_px: int, camera: CameraModel | None = None
     top_v = int(min(max(top, 0.0), 0.8 * height_px))
     bottom_v = int(BOTTOM_FRACTION * height_px) if camera is None else height_px - 1
     w = width_px - 1
-    polygon = ((0, bottom_v), (int(0.38 * w), top_v), (int(0.62 * w), top_v), (w, bottom_v))
-    return RoadRegion(width_px, height_px, top_v, bottom_v, polygon)
+    # a camera model means a known (often low, pitched-down) camera: the lines leave through the image sides
+    side = SIDE_FRACTION if camera is not None else 0.0
+    side_v = int(bottom_v - side * (bottom_v - top_v))
+    polygon = ((0, bottom_v), (0, side_v), (int(0.38 * w), top_v), (int(0.62 * w), top_v), (w, side_v), (w, bottom_v))
+    if camera is None:
+        return RoadRegion(width_px, height_px, top_v, bottom_v, polygon, TOPHAT_WIDTH, NEAR_TOPHAT_WIDTH)
+    return RoadRegion(width_px, height_px, top_v, bottom_v, polygon, TOPHAT_WIDTH_PITCHED, NEAR_TOPHAT_WIDTH_PITCHED)
 
 
 def region_mask(region: RoadRegion) -> np.ndarray:
@@ -102,16 +113,31 @@ def region_mask(region: RoadRegion) -> np.ndarray:
     return mask
 
 
-def marking_features(hls: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """uint8 0/255 pixels that look like lane paint (bright ridges or yellow) inside the mask, from an HLS image."""
+def marking_features(hls: np.ndarray, mask: np.ndarray, region: RoadRegion | None = None) -> np.ndarray:
+    """uint8 0/255 pixels that look like lane paint (bright ridges or yellow) inside the mask, from an HLS image.
+
+    Markings widen toward the camera, so the top-hat window is wider in the near half of the road region.
+    """
     hue, light, sat = hls[:, :, 0], hls[:, :, 1], hls[:, :, 2]
-    k = max(3, int(TOPHAT_WIDTH * hls.shape[1]) | 1)
-    ridge = cv2.morphologyEx(light, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (k, 1)))
-    bright = ridge >= RIDGE_MIN
+    light = cv2.GaussianBlur(light, (3, 3), 0)  # the classic smoothing step: sensor noise must not make ridges
+    w = hls.shape[1]
+    far = region.far_tophat if region is not None else TOPHAT_WIDTH
+    ridge_l, ridge_s = _tophat(light, far * w), _tophat(sat, far * w)
+    if region is not None:
+        near = slice((region.top_v_px + region.bottom_v_px) // 2, region.bottom_v_px + 1)
+        ridge_l[near] = _tophat(light[near], region.near_tophat * w)
+        ridge_s[near] = _tophat(sat[near], region.near_tophat * w)
+    bright = ridge_l >= RIDGE_MIN
     yellow = (hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]) & (sat >= YELLOW_SAT_MIN) & (light >= YELLOW_LIGHT_MIN)
-    yellow &= cv2.morphologyEx(sat, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (k, 1))) >= RIDGE_MIN
+    yellow &= ridge_s >= RIDGE_MIN
     features = ((bright | yellow) * np.uint8(255)).astype(np.uint8)
     return cv2.bitwise_and(features, mask)
+
+
+def _tophat(channel: np.ndarray, width_px: float) -> np.ndarray:
+    """What is brighter than its surroundings within a horizontal window (morphological top-hat)."""
+    k = max(3, int(width_px) | 1)
+    return cv2.morphologyEx(channel, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (k, 1)))
 
 
 def hough_segments(features: np.ndarray) -> np.ndarray:
@@ -204,7 +230,7 @@ def line_support(features: np.ndarray, region: RoadRegion, slope: float, interce
 def detect_lanes(hls: np.ndarray, region: RoadRegion, mask: np.ndarray | None = None) -> LaneDetection:
     """Left/right boundaries of the ego lane in a working-size HLS image (cv2.COLOR_BGR2HLS)."""
     mask = region_mask(region) if mask is None else mask
-    features = marking_features(hls, mask)
+    features = marking_features(hls, mask, region)
     segments = hough_segments(features)
     left_s, right_s = split_by_slope(segments, region.width_px)
     lines: list[LaneLine | None] = []

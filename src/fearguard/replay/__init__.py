@@ -1,0 +1,1 @@
+"""Replay recorded drives through the supervisor: frame sources (video, image folder, Donkey tub) and sensor logs."""

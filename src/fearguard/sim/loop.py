@@ -1,0 +1,155 @@
+"""The closed loop: rendered frames and simulated sensors → real perception and supervisor → the car.
+
+Every frame: the world is sensed (camera frame, ultrasonic, odometer, speed); the steering estimator
+(default ``HoughLaneSteering`` on the rendered frame, with the scenario's estimator fault applied)
+proposes an angle; ``FearGuard`` (or a baseline) decides; the car follows min(cruise, limit) within
+its limits. No cue shortcuts: the cues come from pixels and readings. Same scenario and seed →
+identical log, byte for byte (nothing reads the wall clock into the log).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fearguard.fuzzy.loader import load_rules
+from fearguard.overlay import VideoOut, annotate
+from fearguard.report import JsonlLog, command_record
+from fearguard.sim.baselines import BASELINES, Baseline
+from fearguard.sim.metrics import Metrics, check_expectations
+from fearguard.sim.scenario import Scenario, SteeringFault
+from fearguard.sim.world import World
+from fearguard.supervisor import Command, FearGuard, Observation
+from fearguard.vision.lane_steering import HoughLaneSteering
+
+CONTROLLERS = ("guarded", *BASELINES)
+
+
+class EstimatorFault(RuntimeError):
+    """Raised by the faulty steering estimator of a scenario (the supervisor must survive it)."""
+
+
+class FaultyEstimator:
+    """Wraps a steering function and applies the scenario's estimator faults at their times."""
+
+    def __init__(self, inner: Callable[[Any], float], faults: tuple[SteeringFault, ...]) -> None:
+        self.inner, self.faults = inner, faults
+        self.pipeline = getattr(inner, "pipeline", None)  # lets FearGuard share the estimator's frame analysis
+        self.t_s = 0.0
+        self._stuck: float | None = None
+
+    def __call__(self, frame: Any) -> float:
+        angle = self.inner(frame)
+        for f in self.faults:
+            if f.active(self.t_s):
+                if f.kind == "raise":
+                    raise EstimatorFault(f"simulated estimator fault at t={self.t_s:.2f} s")
+                if f.kind == "nan":
+                    return math.nan
+                if f.kind == "stuck":
+                    return f.value
+                if f.kind == "bias":
+                    return angle + f.value
+        return angle
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """A finished run: its summary (metrics), the expectations checked, and where the files are."""
+
+    scenario: str
+    controller: str
+    seed: int
+    summary: dict[str, Any]
+    expectations: list[dict[str, Any]]
+    frames: int
+    interrupted: bool = False
+
+    @property
+    def passed(self) -> bool:
+        return all(e["ok"] for e in self.expectations)
+
+
+def run_scenario(
+    scenario: Scenario, seed: int | None = None, controller: str = "guarded", log_path: Path | None = None,
+    video_path: Path | None = None, on_frame: Callable[[int, int], None] | None = None,
+) -> RunResult:
+    """Run one scenario closed loop; write the JSON Lines log (flushed per frame) and the video if asked."""
+    if controller not in CONTROLLERS:
+        raise ValueError(f"unknown controller {controller!r}; choose one of {', '.join(CONTROLLERS)}")
+    seed = scenario.seed if seed is None else seed
+    world = World(scenario, seed=seed)
+    camera = world.camera
+    lanes = HoughLaneSteering(camera=camera, fps=scenario.camera.fps)
+    estimator = FaultyEstimator(lanes, scenario.faults.steering)
+    profile = scenario.vehicle
+    guard = FearGuard(estimator, rules=load_rules(scenario.rules_path), vehicle=profile.limits, camera=camera)
+    baseline = Baseline(controller, profile.cruise_speed_mps) if controller != "guarded" else None
+    metrics = Metrics()
+    timeline: list[dict[str, Any]] = []
+    total = math.ceil(scenario.duration_s / world.dt_s)
+    log = JsonlLog(log_path) if log_path is not None else None
+    video = VideoOut(str(video_path), scenario.camera.fps) if video_path is not None else None
+    frame_index, interrupted, last_steer = 0, False, 0.0
+    try:
+        while True:
+            sens = world.sense()
+            estimator.t_s = sens.t_s
+            cmd: Command | None = None
+            if baseline is None:
+                obs = Observation(sens.t_s, sens.speed_mps, sens.frame_bgr, None, sens.ultrasonic_range_m, sens.odometer_m)
+                cmd = guard.step(obs)
+                steering, target = cmd.steering_deg, min(profile.cruise_speed_mps, cmd.speed_limit_mps)
+            else:
+                steering = _unsupervised_steering(estimator, sens.frame_bgr, last_steer, profile.max_steering_deg)
+                target = baseline.speed_target(sens.t_s, sens.ultrasonic_range_m)
+            last_steer = steering
+            world.advance(steering, target)
+            truth = world.truth()
+            mode = cmd.mode.name if cmd is not None else None
+            strategy = cmd.strategy.name if cmd is not None else None
+            limit = cmd.speed_limit_mps if cmd is not None else None
+            metrics.add(truth, mode, strategy, limit, cmd.fear if cmd is not None else None)
+            timeline.append({"t_s": truth.t_s, "mode": mode, "strategy": strategy, "speed_mps": truth.speed_mps, "s_m": truth.s_m})
+            if log is not None:
+                log.write(command_record(
+                    frame_index, sens.t_s, cmd, controller=controller, speed_target_mps=target, applied_steering_deg=steering,
+                    speed_mps=truth.speed_mps, s_m=truth.s_m, lateral_m=truth.lateral_m, x_m=truth.x_m, y_m=truth.y_m,
+                    gap_m=truth.gap_m, ttc_s=truth.ttc_s, collided=truth.collided, in_lane=truth.in_lane,
+                    ultrasonic_raw_m=sens.ultrasonic_range_m,
+                ))
+            if video is not None:
+                analysis = guard.last_perception.analysis if cmd is not None and guard.last_perception is not None else None
+                if analysis is None and cmd is None:
+                    analysis = lanes.pipeline.process(sens.frame_bgr)
+                video.write(annotate(sens.frame_bgr, cmd, analysis, f"v {truth.speed_mps:.2f} m/s"))
+            frame_index += 1
+            if on_frame is not None:
+                on_frame(frame_index, total)
+            if truth.collided or truth.finished:
+                break
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        if log is not None:
+            log.close()
+        if video is not None:
+            video.close()
+    summary = metrics.summary()
+    results = check_expectations(scenario.expectations, summary, timeline)
+    expectations = [{"name": r.name, "ok": bool(r.ok), "detail": r.detail} for r in results]
+    return RunResult(scenario.name, controller, seed, summary, expectations, frame_index, interrupted)
+
+
+def _unsupervised_steering(estimator: Callable[[Any], float], frame: np.ndarray, last: float, limit: float) -> float:
+    """What a car without a supervisor does with its estimator's answer: use it; on a fault, keep the last angle."""
+    try:
+        angle = float(estimator(frame))
+    except Exception:  # an unsupervised car has no better idea than holding the wheel
+        return last
+    return max(-limit, min(limit, angle)) if math.isfinite(angle) else last
