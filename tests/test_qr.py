@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import itertools
-import subprocess
-import sys
-import textwrap
 from pathlib import Path
 
 import cv2
@@ -15,6 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
+from fearguard.vision import qr
 from fearguard.vision.qr import QrMarker, detect_qr, detect_qr_traced
 
 PAYLOAD = "FG1;route=campus;sector=3;pos_m=12.5"
@@ -149,7 +147,7 @@ def roads(shared_data: Path) -> list[np.ndarray]:
 
 
 def test_thorough_decodes_every_sharp_board_from_60px_tilted_up_to_40deg(roads) -> None:
-    assert grid_failures(roads, (60, 80), TILTS_DEG, ROLLS_DEG, 0.0, thorough=True) == []
+    assert grid_failures(roads, (60,), TILTS_DEG, ROLLS_DEG, 0.0, thorough=True) == []
 
 
 def test_thorough_decodes_every_blurred_board_from_100px(roads) -> None:
@@ -214,25 +212,39 @@ def test_grey_bgra_and_bgr_frames_give_the_same_markers(roads) -> None:
 def test_road_stills_without_qr_give_no_marker(shared_data: Path, size: tuple[int, int]) -> None:
     frames = road_frames(shared_data, size)
     assert [detect_qr(f) for f in frames] == [()] * len(frames)
-    if size == (640, 480):  # the whole cascade is slow: one size is enough to show it invents nothing
-        assert [detect_qr(f, thorough=True) for f in frames] == [()] * len(frames)
+    if size == (640, 480):  # the whole cascade is slow: one size and every other still show it invents nothing
+        assert [detect_qr(f, thorough=True) for f in frames[::2]] == [()] * len(frames[::2])
 
 
-def test_no_binarised_image_reaches_the_plain_detector(shared_data: Path) -> None:
-    """OpenCV 5.0's QRCodeDetector aborts the process (double free) on the Otsu image of this frame; ours must not."""
-    script = textwrap.dedent(f"""
-        import sys
-        sys.path.insert(0, {str(Path(__file__).parent)!r})
-        from pathlib import Path
-        from test_qr import board_in_frame, road_frames
-        from fearguard.vision.qr import detect_qr
-        frame, _ = board_in_frame(road_frames(Path({str(shared_data)!r}))[11], 80, 30, 30, 90, (241, 259), 1.0)
-        for thorough in (False, True):
-            detect_qr(frame, thorough=thorough)
-        print("survived")
-    """)
-    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
-    assert run.returncode == 0 and "survived" in run.stdout, run.stderr[-2000:]
+class _SpyDetector:
+    """Stands in for cv2.QRCodeDetector and records how many grey levels each image handed to it has."""
+
+    def __init__(self) -> None:
+        self.real, self.levels = cv2.QRCodeDetector(), []
+
+    def detectAndDecode(self, img):  # OpenCV's method names
+        self.levels.append(len(np.unique(img)))
+        return self.real.detectAndDecode(img)
+
+    def decode(self, img, points):
+        self.levels.append(len(np.unique(img)))
+        return self.real.decode(img, points)
+
+
+def test_no_binarised_image_reaches_the_plain_detector(shared_data: Path, roads, monkeypatch) -> None:
+    """OpenCV 5.0's QRCodeDetector aborts the process (double free) on some binarised images: it must never get one.
+
+    One such frame: ``board_in_frame(roads[11], 80, 30, 30, 90, (241, 259), 1.0)`` → grey → Otsu → ``detectAndDecode``
+    (in a fresh process; after other allocations the corruption may go unnoticed, so a crash test would be flaky).
+    """
+    spy = _SpyDetector()
+    monkeypatch.setattr(qr, "_plain", lambda: spy)
+    hard = cv2.imread(str(shared_data / "qr" / "zxing-qrcode-1" / "8.png"))  # candidates that never decode: every attempt runs
+    for frame in (roads[0], hard, board_in_frame(roads[11], 60, 0, 0, 20, sigma_px=1.0)[0]):
+        detect_qr(frame)
+        detect_qr(frame, thorough=True)
+    assert len(spy.levels) >= 6, "the plain detector was hardly used: this test would not notice anything"
+    assert min(spy.levels) > 2
 
 
 # -- bad input: never raises, returns () ------------------------------------------------------------------

@@ -57,7 +57,7 @@ class Perception:
     ) -> None:
         self.vehicle = vehicle if vehicle is not None else VehicleLimits()
         self.pipeline = pipeline if pipeline is not None else FramePipeline(camera)
-        self.ultrasonic = UltrasonicFilter()
+        self.ultrasonic = UltrasonicFilter(self.vehicle.ultrasonic_min_range_m, self.vehicle.ultrasonic_max_range_m)
         self.localiser = QrLocaliser(marker_spacing_m=marker_spacing_m)
         self._marker_spacing_m = marker_spacing_m
         self._last_signature: bytes | None = None

@@ -21,6 +21,8 @@ class VehicleLimits:
     max_steering_deg: float = 30.0
     has_ultrasonic: bool = True
     has_qr_localisation: bool = True
+    ultrasonic_min_range_m: float = 0.15  # [m] HC-SR04 class (6 in); a radar-like range sensor: set its own
+    ultrasonic_max_range_m: float = 3.96  # [m] (156 in); beyond it the sensor reports "nothing in range"
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -36,3 +38,8 @@ class VehicleLimits:
         for name in ("reaction_time_s", "stop_margin_m"):
             if getattr(self, name) < 0:
                 raise ValueError(f"VehicleLimits.{name} must be >= 0, got {getattr(self, name)}")
+        if not 0 < self.ultrasonic_min_range_m < self.ultrasonic_max_range_m:
+            raise ValueError(
+                f"VehicleLimits needs 0 < ultrasonic_min_range_m < ultrasonic_max_range_m, got "
+                f"{self.ultrasonic_min_range_m} and {self.ultrasonic_max_range_m}"
+            )

@@ -5,13 +5,16 @@ Payload (version FG1), e.g. ``FG1;route=campus;sector=3;pos_m=12.5``: the prefix
 ``sector`` an integer ≥ 0; ``pos_m`` the board's position along the route in metres (decimal ≥ 0, no
 sign or exponent). Extra keys are ignored (room for later fields); empty fields are ignored.
 
-Localisation: a marker read is a *fix* when it is plausible: on the expected route, and, if there is
-an earlier fix, within ``max(position_tolerance_m, odometer_rel_tol × |driven|)`` of where the odometer
-says the car is (last fix + distance driven since). Without odometer the bound is time × max speed.
-A rejected marker does not refresh anything. ``staleness_s`` is the time since the last fix (``inf``
-before the first one); time that is NaN or runs backwards is ignored, so staleness never decreases
-except at a fix. Two distinct markers that agree with each other by odometer but not with the old fix
-re-localise the car (it was carried elsewhere, the odometer slipped): one spoofed board alone never can.
+Localisation: a marker read is a *fix* when it is plausible — on the expected route (``route=``, or the
+first route seen), within the route's length if known, and, after an earlier fix, within
+``max(position_tolerance_m, odometer_rel_tol × |driven|)`` of where the odometer says the car is (last fix
++ distance driven since). The first fix has nothing to compare with and is accepted. Without odometer the
+position is unknown and a fix may lie at most ``max_speed_mps`` × time (+ tolerance) from the last one.
+The last fix's board read again is a fix while at most one spacing was driven since its first reading.
+A rejected marker refreshes nothing. ``staleness_s`` is the time since the last fix (``inf`` before the
+first); an update whose time is NaN or runs backwards is ignored, so staleness never decreases except at
+a fix. Two distinct markers that agree with each other by odometer but not with the old fix re-localise
+the car (it was carried elsewhere, the odometer slipped): one spoofed board alone never can.
 """
 
 from __future__ import annotations
@@ -118,11 +121,13 @@ def plausible_fix(
     position_tolerance_m: float = POSITION_TOLERANCE_M,
     odometer_rel_tol: float = ODOMETER_REL_TOL,
     max_speed_mps: float = MAX_SPEED_MPS,
+    marker_spacing_m: float = MARKER_SPACING_M,
 ) -> str | None:
     """None if ``marker`` is a plausible fix after ``last`` (odometer ``since_fix_m``, ``elapsed_s`` later), else why not.
 
     ``route``: the expected route (None: any). ``since_fix_m`` None: odometer unknown, the bound is
     ``elapsed_s`` × ``max_speed_mps`` + tolerance. No ``last``: plausible if on the route and within its length.
+    ``last`` read again (the car still approaching it): plausible until a whole spacing was driven since its first reading.
     """
     if route is not None and marker.route != route:
         return f"QR marker route {marker.route!r} rejected: expected route {route!r}"
@@ -130,6 +135,11 @@ def plausible_fix(
         return f"QR marker at {marker.pos_m:.1f} m rejected: beyond the route's length {route_length_m:.1f} m"
     if last is None:
         return None
+    if marker == last and since_fix_m is not None:
+        if -position_tolerance_m <= since_fix_m <= marker_spacing_m:
+            return None
+        return (f"QR marker at {marker.pos_m:.1f} m rejected: the last fix's board, but {since_fix_m:.1f} m driven since "
+                f"its first reading (a board is read over at most one spacing, {marker_spacing_m:.1f} m)")
     if since_fix_m is not None:
         expected = last.pos_m + since_fix_m
         tol = fix_tolerance_m(since_fix_m, position_tolerance_m, odometer_rel_tol)
@@ -265,7 +275,7 @@ class QrLocaliser:
         since = None if ref is None or ref.odometer_m is None or odo is None else odo - ref.odometer_m
         elapsed = None if ref is None else t - ref.t_s
         return plausible_fix(marker, None if ref is None else ref.marker, since, elapsed, self._route, self.route_length_m,
-                             self.position_tolerance_m, self.odometer_rel_tol, self.max_speed_mps)
+                             self.position_tolerance_m, self.odometer_rel_tol, self.max_speed_mps, self.marker_spacing_m)
 
     def _accept(self, marker: TrackMarker, t: float, odo: float | None, reasons: list[str]) -> bool:
         why = self._check(marker, self._fix, t, odo)

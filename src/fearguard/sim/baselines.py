@@ -22,11 +22,11 @@ BASELINES = ("unguarded", "crisp", "aeb")
 class Baseline:
     """A speed rule without fear: cruise unless the rule says stop."""
 
-    def __init__(self, name: str, cruise_mps: float) -> None:
+    def __init__(self, name: str, cruise_mps: float, min_range_m: float = 0.15, max_range_m: float = 3.96) -> None:
         if name not in BASELINES:
             raise ValueError(f"unknown baseline {name!r}; choose one of {', '.join(BASELINES)}")
         self.name, self.cruise_mps = name, cruise_mps
-        self.filter = UltrasonicFilter()
+        self.filter = UltrasonicFilter(min_range_m, max_range_m)
         self.braking = False
 
     def speed_target(self, t_s: float, ultrasonic_range_m: float | None) -> float:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -88,8 +88,13 @@ def run_scenario(
     lanes = HoughLaneSteering(camera=camera, fps=scenario.camera.fps)
     estimator = FaultyEstimator(lanes, scenario.faults.steering)
     profile = scenario.vehicle
-    guard = FearGuard(estimator, rules=load_rules(scenario.rules_path), vehicle=profile.limits, camera=camera)
-    baseline = Baseline(controller, profile.cruise_speed_mps) if controller != "guarded" else None
+    limits = profile.limits
+    if scenario.sensors is not None:  # the range sensor the scenario's car carries (HC-SR04 on a model car, radar-like on a road car)
+        limits = replace(limits, ultrasonic_min_range_m=scenario.sensors.min_range_m, ultrasonic_max_range_m=scenario.sensors.max_range_m)
+    guard = FearGuard(estimator, rules=load_rules(scenario.rules_path), vehicle=limits, camera=camera)
+    baseline = None
+    if controller != "guarded":
+        baseline = Baseline(controller, profile.cruise_speed_mps, limits.ultrasonic_min_range_m, limits.ultrasonic_max_range_m)
     metrics = Metrics()
     timeline: list[dict[str, Any]] = []
     total = math.ceil(scenario.duration_s / world.dt_s)

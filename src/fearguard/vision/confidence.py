@@ -23,7 +23,7 @@ VP_U_RANGE = (0.1, 0.9)  # [-] of the width: where the vanishing point may lie h
 RAMP = 0.1  # [-] of the image size: plausibility falls from 1 to 0 over this distance outside a range
 CLIPPED_BLIND = 0.5  # [-] share of clipped road pixels at which the picture counts as blind
 OCCLUDED_BLIND = 0.8  # [-] occlusion at which the visible rest of the markings no longer vouches for the lane
-AGREEMENT_SCALE = 0.25  # [-] of the lane width: mean disagreement with the track at which agreement reaches 0
+AGREEMENT_SCALE = 0.35  # [-] of the lane width: mean disagreement with the track at which agreement reaches 0
 
 
 @dataclass(frozen=True)
@@ -72,10 +72,10 @@ def geometry_plausibility(left: LaneLine, right: LaneLine, region: RoadRegion) -
 
 
 def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadRegion, lane_width_px: float) -> float:
-    """1 when the detected boundary lies on the tracked one, 0 at AGREEMENT_SCALE of a lane width apart."""
+    """1 when the detected boundary lies on the tracked one (mid and bottom rows), 0 at AGREEMENT_SCALE of a lane width apart."""
     if measured is None or tracked is None or lane_width_px <= 0:
         return 1.0
-    rows = (region.top_v_px, region.bottom_v_px)
+    rows = (0.5 * (region.top_v_px + region.bottom_v_px), region.bottom_v_px)  # the far end swings most in curves
     err = sum(abs(measured.u_at(v) - tracked.u_at(v)) for v in rows) / len(rows)
     return max(0.0, 1.0 - err / (AGREEMENT_SCALE * lane_width_px))
 

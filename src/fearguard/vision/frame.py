@@ -147,15 +147,19 @@ def _analyze(
     gray, hls = _band_conversions(work, region)
     t1 = clock()
     exposure = road_exposure(gray, mask)
-    det = detect_lanes(hls, region, mask)
+    priors = state.lanes.current(region) if state is not None else (None, None)
+    det = detect_lanes(hls, region, mask, priors)
     t2 = clock()
     left, right = det.left, det.right
     agree_l = agree_r = 1.0
     memory = state.memory if state is not None else LaneMemory()
     v_aim = lookahead_row(region)
     width_px = memory.remember_width(left, right, v_aim, ww)
+    seen_left, seen_right = det.left, det.right  # the evidence: detections the tracker accepted (an outlier is a miss)
     if state is not None:
         tracked = state.lanes.update(t_s, region, left, right)
+        seen_left = det.left if tracked.left_accepted else None
+        seen_right = det.right if tracked.right_accepted else None
         agree_l = agreement(left, tracked.predicted_left, region, width_px)
         agree_r = agreement(right, tracked.predicted_right, region, width_px)
         left = left if tracked.left is None or left is None else _with_track(left, tracked.left)
@@ -178,7 +182,7 @@ def _analyze(
     occ = occlusion(gray, hls, det.features, region, exp_l, exp_r, reference, boxes)
     lead = lead_from_box(box, cam) if box is not None else None
     clipped = exposure.saturated_share + exposure.black_share
-    evidence = lane_confidence(det.left, det.right, region, agree_l, agree_r, occ, clipped)
+    evidence = lane_confidence(seen_left, seen_right, region, agree_l, agree_r, occ, clipped)
     t4 = clock()
     payloads = tuple(m.payload for m in detect_qr(bgr)) if qr else ()
     t5 = clock()

@@ -108,6 +108,12 @@ class LaneTracker:
     def reset(self) -> None:
         self._tracks, self._last_t_s = None, None
 
+    def current(self, region: RoadRegion) -> tuple[LaneLine | None, LaneLine | None]:
+        """The tracked boundaries as of the last update (the prior for this frame's line choice)."""
+        if self._tracks is None or self._tracks[0].width_px != region.width_px:
+            return None, None
+        return self._tracks[0].line(region), self._tracks[1].line(region)
+
     def update(self, t_s: float, region: RoadRegion, left: LaneLine | None, right: LaneLine | None) -> TrackedLanes:
         if self._tracks is None or self._tracks[0].width_px != region.width_px:
             self._tracks = (BoundaryTrack(region.width_px), BoundaryTrack(region.width_px))

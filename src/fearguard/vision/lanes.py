@@ -167,10 +167,11 @@ def split_by_slope(segments: np.ndarray, width_px: int) -> tuple[np.ndarray, np.
     return segments[left], segments[right]
 
 
-def fit_line(segments: np.ndarray, region: RoadRegion) -> tuple[float, float] | None:
-    """The boundary among one side's segments: the best-supported line (RANSAC over segment hypotheses,
-    ties going to the innermost, since the ego lane's boundary is the marking nearest the car's path),
-    then a length-weighted least-squares fit u = a·v + b of its inlier segments."""
+def fit_line(segments: np.ndarray, region: RoadRegion, prior: LaneLine | None = None) -> tuple[float, float] | None:
+    """The boundary among one side's segments: the best-supported line (RANSAC over segment hypotheses; among
+    near-ties the one nearest the prior — last frame's tracked boundary — else the innermost, since the ego lane's
+    boundary is the marking nearest the car's path), then a length-weighted least-squares fit u = a·v + b of its
+    inlier segments. The prior keeps a curved boundary, which two straight lines fit about equally, from flipping."""
     if len(segments) == 0:
         return None
     w = region.width_px
@@ -194,7 +195,12 @@ def fit_line(segments: np.ndarray, region: RoadRegion) -> tuple[float, float] | 
     candidates = (score >= RANSAC_KEEP * score.max()) & (off_centre >= MIN_OFF_CENTRE * w)
     if not candidates.any():
         candidates = score >= RANSAC_KEEP * score.max()
-    best = int(np.flatnonzero(candidates)[np.argmin(off_centre[candidates])])
+    if prior is not None:
+        rows = np.array([0.5 * (region.top_v_px + region.bottom_v_px), region.bottom_v_px])
+        distance = np.abs(slope[:, None] * rows[None, :] + icpt[:, None] - prior.u_at(rows)[None, :]).mean(axis=1)
+        best = int(np.flatnonzero(candidates)[np.argmin(distance[candidates])])
+    else:
+        best = int(np.flatnonzero(candidates)[np.argmin(off_centre[candidates])])
     chosen = seg[inlier[best]]
     v = np.concatenate([chosen[:, 1], chosen[:, 3]])
     u = np.concatenate([chosen[:, 0], chosen[:, 2]])
@@ -227,15 +233,17 @@ def line_support(features: np.ndarray, region: RoadRegion, slope: float, interce
     return float(min(1.0, covered / SUPPORT_FULL))
 
 
-def detect_lanes(hls: np.ndarray, region: RoadRegion, mask: np.ndarray | None = None) -> LaneDetection:
-    """Left/right boundaries of the ego lane in a working-size HLS image (cv2.COLOR_BGR2HLS)."""
+def detect_lanes(
+    hls: np.ndarray, region: RoadRegion, mask: np.ndarray | None = None, priors: tuple[LaneLine | None, LaneLine | None] = (None, None)
+) -> LaneDetection:
+    """Left/right boundaries of the ego lane in a working-size HLS image (cv2.COLOR_BGR2HLS); priors: last tracked ones."""
     mask = region_mask(region) if mask is None else mask
     features = marking_features(hls, mask, region)
     segments = hough_segments(features)
     left_s, right_s = split_by_slope(segments, region.width_px)
     lines: list[LaneLine | None] = []
-    for side in (left_s, right_s):
-        fit = fit_line(side, region)
+    for side, prior in zip((left_s, right_s), priors, strict=True):
+        fit = fit_line(side, region, prior)
         if fit is None:
             lines.append(None)
             continue

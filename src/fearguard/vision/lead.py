@@ -1,9 +1,9 @@
 """The vehicle ahead in the ego lane: found by its dark underside, tracked, turned into bearing and range.
 
-Classic cue: whatever its colour, a vehicle casts a dark band on the road under its rear. Pixels much
-darker than the road reference inside the ego lane (widened a little) form connected blobs; a blob as
-wide as a vehicle at that image row (``WIDTH_RANGE`` of the lane width there) with non-road pixels above
-it is a vehicle; its box is the blob's width, ``ASPECT`` × width tall, standing on the blob's bottom row.
+Classic cues: whatever its colour, a vehicle casts a dark band on the road under its rear, and it shows
+two red tail lights. Pixels much darker than the road reference inside the ego lane (widened a little)
+form connected blobs; a blob as wide as a vehicle at that image row (``WIDTH_RANGE`` of the lane width
+there) with non-road pixels and some tail-light red above it is a vehicle (a tree shadow has no lamps); its box is the blob's width, ``ASPECT`` × width tall, standing on the blob's bottom row.
 Boxes from an external detector enter as ``LeadBox`` too. Bearing comes from the camera model, range
 from ground-plane geometry (needs the camera's mounting height) — or, when fused, from the ultrasonic.
 """
@@ -28,6 +28,9 @@ ASPECT = 0.8  # [-] box height / width of a vehicle's rear
 MAX_ASPECT = 1.3  # [-] a blob taller than this × its width is not a vehicle's rear
 MIN_FILL = 0.35  # [-] blob area / bounding-box area
 ABOVE_FOREIGN_MIN = 0.35  # [-] share of non-road pixels in the box above the underside
+RED_HUE_MAX = 8  # [OpenCV hue 0..180] tail-light red is within this of hue 0
+RED_SAT_MIN = 120  # [0..255] and this saturated
+TAIL_LIGHT_SHARE = 0.004  # [-] share of the box that must be tail-light red (two small lamps)
 CONFIRM_HITS = 2  # [frames] detections in a row before a new lead is reported
 LOST_AFTER_S = 0.5  # [s] a track coasts this long without detections
 GATE_CHI2 = 16.3  # [-] chi-square, 3 dof, p = 0.001
@@ -98,6 +101,10 @@ def detect_lead(
         foreign = (np.abs(patch - reference) > dev) | (sat >= 110)
         if foreign.mean() < ABOVE_FOREIGN_MIN:
             continue
+        hue = hls[y0 : v_bottom + 1, x : x + bw, 0]
+        red = ((hue <= RED_HUE_MAX) | (hue >= 180 - RED_HUE_MAX)) & (hls[y0 : v_bottom + 1, x : x + bw, 2] >= RED_SAT_MIN)
+        if red.mean() < TAIL_LIGHT_SHARE:
+            continue  # no tail lights: a shadow or a dark patch, not the rear of a vehicle
         if best is None or v_bottom > best.y_px + best.h_px - 1:
             best = LeadBox(float(x), float(y0), float(bw), float(v_bottom - y0 + 1))
     return best

@@ -86,8 +86,9 @@ def hidden_samples(
     row_ref = row_references(gray, region, rows, interior)
     row_dev = np.maximum(FOREIGN_DEV_MIN, FOREIGN_DEV * row_ref)
     foreign = (np.abs(grey - reference) > dev) & (np.abs(grey - row_ref) > row_dev)
+    sat = np.median(hls[r, clipped, 2], axis=1)
     med_hue = np.median(hls[r, clipped, 0], axis=1)
-    foreign |= (np.median(hls[r, clipped, 2], axis=1) >= COLOUR_SAT_MIN) & ~((med_hue >= 14) & (med_hue <= 40))
+    foreign |= (sat >= COLOUR_SAT_MIN) & ~((med_hue >= 14) & (med_hue <= 40))
     hidden = foreign & ~paint.any(axis=1)
     u = centre[seen]
     for x, y, w, h in boxes:
