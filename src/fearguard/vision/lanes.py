@@ -14,7 +14,7 @@ are steep in the image.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -39,6 +39,7 @@ HOUGH_THRESHOLD = 10  # [votes]
 HOUGH_MIN_LENGTH = 0.03  # [-] of the width
 HOUGH_MAX_GAP = 0.03  # [-] of the width
 FIT_OUTLIER_PX = 0.03  # [-] of the width: a segment whose end points are this close to a line supports it
+RANSAC_MAX_SEGMENTS = 40  # [-] per side
 RANSAC_KEEP = 0.6  # [-] lines with this share of the best support compete; the innermost wins
 MIN_OFF_CENTRE = 0.08  # [-] of the width: a boundary this close to the image centre at the bottom is a seam, not a lane edge
 SUPPORT_BAND_PX = 2  # [px] a feature pixel within this of the line supports it
@@ -175,15 +176,16 @@ def fit_line(segments: np.ndarray, region: RoadRegion, prior: LaneLine | None = 
     if len(segments) == 0:
         return None
     w = region.width_px
-    du = segments[:, 2] - segments[:, 0]
     dv = segments[:, 3] - segments[:, 1]
     steep = np.abs(dv) > 1e-9
     seg = segments[steep]
     if len(seg) == 0:
         return None
+    if len(seg) > RANSAC_MAX_SEGMENTS:  # hypotheses and voters: the longest segments (bounds the O(n²) cost)
+        seg = seg[np.argsort(-np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]))[:RANSAC_MAX_SEGMENTS]]
     slope = (seg[:, 2] - seg[:, 0]) / (seg[:, 3] - seg[:, 1])
     icpt = seg[:, 0] - slope * seg[:, 1]
-    length = np.hypot(du[steep], dv[steep])
+    length = np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1])
     tol = FIT_OUTLIER_PX * w
     # distance of every segment's two end points from every hypothesis line (rows: hypotheses)
     d1 = np.abs(seg[None, :, 0] - (slope[:, None] * seg[None, :, 1] + icpt[:, None]))
@@ -238,8 +240,12 @@ def detect_lanes(
 ) -> LaneDetection:
     """Left/right boundaries of the ego lane in a working-size HLS image (cv2.COLOR_BGR2HLS); priors: last tracked ones."""
     mask = region_mask(region) if mask is None else mask
-    features = marking_features(hls, mask, region)
-    segments = hough_segments(features)
+    band = slice(region.top_v_px, region.bottom_v_px + 1)  # everything below runs on the road rows only
+    crop = replace(region, top_v_px=0, bottom_v_px=region.bottom_v_px - region.top_v_px, height_px=region.bottom_v_px - region.top_v_px + 1)
+    features = np.zeros(mask.shape, np.uint8)
+    features[band] = marking_features(hls[band], mask[band], crop)
+    segments = hough_segments(features[band])
+    segments[:, [1, 3]] += region.top_v_px
     left_s, right_s = split_by_slope(segments, region.width_px)
     lines: list[LaneLine | None] = []
     for side, prior in zip((left_s, right_s), priors, strict=True):

@@ -3,7 +3,8 @@
 Classic cues: whatever its colour, a vehicle casts a dark band on the road under its rear, and it shows
 two red tail lights. Pixels much darker than the road reference inside the ego lane (widened a little)
 form connected blobs; a blob as wide as a vehicle at that image row (``WIDTH_RANGE`` of the lane width
-there) with non-road pixels and some tail-light red above it is a vehicle (a tree shadow has no lamps); its box is the blob's width, ``ASPECT`` × width tall, standing on the blob's bottom row.
+there) with non-road pixels and some tail-light red above it is a vehicle (a tree shadow has no lamps);
+its box is the blob's width, ``ASPECT`` × width tall, standing on the blob's bottom row.
 Boxes from an external detector enter as ``LeadBox`` too. Bearing comes from the camera model, range
 from ground-plane geometry (needs the camera's mounting height) — or, when fused, from the ultrasonic.
 """
@@ -79,7 +80,12 @@ def detect_lead(
     poly = np.concatenate([np.stack([lu - LANE_WIDEN * width, rows], 1), np.stack([ru + LANE_WIDEN * width, rows], 1)[::-1]])
     cv2.fillPoly(lane, [np.rint(poly).astype(np.int32)], 255)
     dark = cv2.bitwise_and(cv2.inRange(gray, 0, int(DARK_RATIO * reference)), lane)
-    n, _labels, stats, _ = cv2.connectedComponentsWithStats(dark, connectivity=8)
+    if cv2.countNonZero(dark) == 0:
+        return None  # nothing dark in the lane: the common case, and the cheap one
+    band = dark[top : bottom + 1]  # components only where the lane is (the rows above cannot hold an underside)
+    n, _labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8)
+    stats = stats.copy()
+    stats[:, 1] += top
     best: LeadBox | None = None
     dev = max(45.0, 0.5 * reference)
     for i in range(1, n):

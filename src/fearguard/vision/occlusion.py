@@ -60,7 +60,13 @@ def row_references(gray: np.ndarray, region: RoadRegion, rows: np.ndarray, inter
     cols = np.rint(a[:, None] + frac[None, :] * (b - a)[:, None])
     inside = (cols >= 0) & (cols < region.width_px)
     values = gray[rows[:, None], np.clip(cols, 0, region.width_px - 1).astype(np.int64)].astype(float)
-    return np.nanmedian(np.where(inside, values, np.nan), axis=1)
+    # median of the in-image samples per row (np.nanmedian goes through masked arrays: 10× slower here)
+    ordered = np.sort(np.where(inside, values, np.inf), axis=1)
+    n = inside.sum(axis=1)
+    lo = np.maximum(n - 1, 0) // 2
+    r = np.arange(len(rows))
+    med = 0.5 * (ordered[r, lo] + ordered[r, np.where(n % 2 == 0, n // 2, lo)])
+    return np.where(n > 0, med, np.nan)
 
 
 def hidden_samples(

@@ -1,0 +1,135 @@
+"""Replay of recorded drives: real videos end to end, truncated and killed runs, a Donkey tub, an image folder,
+and a sensor log with an approaching obstacle."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from fearguard.cli import main
+from fearguard.replay.run import ReplayOptions, replay
+from fearguard.report import read_jsonl
+
+
+@pytest.fixture(scope="module")
+def video(shared_data: Path) -> Path:
+    return shared_data / "road" / "video" / "solidWhiteRight.mp4"
+
+
+def test_easy_drive_replays_without_false_alarms(video: Path, tmp_path: Path, capsys):
+    assert main(["replay", str(video), "--out", str(tmp_path)]) == 0
+    records = read_jsonl(tmp_path / "log.jsonl")
+    assert len(records) == 221
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    calm = summary["fear_level_share"]["VERY_LOW"] + summary["fear_level_share"]["LOW"]
+    assert calm >= 0.9 and summary["emergency_episodes"] == []
+    assert (tmp_path / "timeline.png").stat().st_size > 1000
+    assert "emergency episodes: 0" in capsys.readouterr().out
+
+
+def test_a_truncated_video_replays_up_to_the_cut_and_says_so(video: Path, tmp_path: Path):
+    cut = tmp_path / "cut.mp4"
+    data = video.read_bytes()
+    cut.write_bytes(data[: int(0.4 * len(data))])
+    result = replay(cut, tmp_path / "out", ReplayOptions(plots=False))
+    records = read_jsonl(tmp_path / "out" / "log.jsonl")
+    assert 0 < len(records) < 221 and records[-1]["frame"] == len(records) - 1
+    assert result.summary["stopped_early"] and "221" in result.summary["stopped_early"]
+
+
+def test_a_killed_replay_leaves_valid_json_lines(video: Path, tmp_path: Path):
+    out = tmp_path / "killed"
+    proc = subprocess.Popen([sys.executable, "-m", "fearguard.cli", "replay", str(video), "--out", str(out)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    log = out / "log.jsonl"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and (not log.exists() or log.read_text().count("\n") < 20):
+        time.sleep(0.05)
+    proc.kill()
+    proc.wait()
+    lines = log.read_text().splitlines()
+    assert len(lines) >= 20
+    complete = lines if log.read_text().endswith("\n") else lines[:-1]
+    frames = [json.loads(line)["frame"] for line in complete]  # every complete line parses
+    assert frames == list(range(len(frames)))
+
+
+def _still(shared_data: Path) -> np.ndarray:
+    return cv2.resize(cv2.imread(str(shared_data / "road" / "images" / "solidWhiteRight.jpg")), (320, 180))
+
+
+def test_an_image_folder_replays_in_name_order(shared_data: Path, tmp_path: Path):
+    folder = tmp_path / "imgs"
+    folder.mkdir()
+    for k in (1, 2, 10):
+        cv2.imwrite(str(folder / f"img{k}.jpg"), _still(shared_data))
+    result = replay(folder, tmp_path / "out", ReplayOptions(fps=10.0, plots=False))
+    records = read_jsonl(tmp_path / "out" / "log.jsonl")
+    assert [r["t_s"] for r in records] == pytest.approx([0.0, 0.1, 0.2])
+    assert result.summary["kind"] == "images"
+
+
+def test_a_donkey_tub_replays_with_its_recorded_angles(shared_data: Path, tmp_path: Path):
+    tub = tmp_path / "tub"
+    (tub / "images").mkdir(parents=True)
+    inputs, types = ["cam/image_array", "user/angle", "user/throttle", "user/mode"], ["image_array", "float", "float", "str"]
+    lines = []
+    for i in range(6):
+        cv2.imwrite(str(tub / "images" / f"{i}_cam_image_array_.jpg"), _still(shared_data))
+        lines.append(json.dumps({"_index": i, "_session_id": "s", "_timestamp_ms": 1000 + 50 * i,
+                                 "cam/image_array": f"{i}_cam_image_array_.jpg", "user/angle": 0.1 * i, "user/throttle": 0.3,
+                                 "user/mode": "user"}))
+    (tub / "catalog_0.catalog").write_text("\n".join(lines) + "\n")
+    (tub / "catalog_0.catalog_manifest").write_text(json.dumps({"path": "catalog_0.catalog", "created_at": 0, "line_lengths": [],
+                                                                "start_index": 0}) + "\n")
+    manifest = [json.dumps(inputs), json.dumps(types), json.dumps({}), json.dumps({"created_at": 0}),
+                json.dumps({"paths": ["catalog_0.catalog"], "current_index": 6, "max_len": 1000, "deleted_indexes": [2]})]
+    (tub / "manifest.json").write_text("\n".join(manifest) + "\n")
+    replay(tub, tmp_path / "out", ReplayOptions(plots=False))
+    records = read_jsonl(tmp_path / "out" / "log.jsonl")
+    assert [r["frame"] for r in records] == [0, 1, 3, 4, 5]
+    assert records[1]["recorded_angle"] == pytest.approx(0.1) and records[1]["t_s"] == pytest.approx(0.05)
+
+
+def test_a_sensor_log_with_an_approaching_obstacle_drives_fear_and_the_limit(shared_data: Path, tmp_path: Path):
+    folder = tmp_path / "imgs"
+    folder.mkdir()
+    for k in range(40):
+        cv2.imwrite(str(folder / f"f{k:03d}.jpg"), _still(shared_data))
+    log = tmp_path / "sensors.csv"
+    rows = ["t_s,ultrasonic_range_m,speed_mps"] + [f"{0.1 * k:.1f},{max(0.2, 3.0 - 0.08 * k):.3f},1.0" for k in range(40)]
+    rows.insert(5, "0.45,not-a-number,1.0")  # a malformed line: reported with its line number, skipped
+    log.write_text("\n".join(rows) + "\n")
+    result = replay(folder, tmp_path / "out", ReplayOptions(fps=10.0, sensor_log=str(log), plots=False))
+    records = read_jsonl(tmp_path / "out" / "log.jsonl")
+    ranges = [r["obstacle_range_m"] for r in records]
+    assert ranges[0] == pytest.approx(3.0, abs=0.1) and ranges[-1] < 0.5
+    assert records[-1]["fear"] > records[0]["fear"] and records[-1]["speed_limit_mps"] < 0.5 * records[5]["speed_limit_mps"] + 1e-9
+    assert records[-1]["mode"] == "EMERGENCY" and records[-1]["strategy"] == "STOP"
+    assert [i["line"] for i in result.summary["sensor_log_issues"]] == [6]
+    with pytest.raises(Exception, match="line 6"):
+        replay(folder, tmp_path / "strict", ReplayOptions(fps=10.0, sensor_log=str(log), strict=True, plots=False))
+
+
+def test_missing_or_unreadable_recording_exits_2_with_advice(tmp_path: Path, capsys):
+    assert main(["replay", str(tmp_path / "nope.mp4"), "--out", str(tmp_path / "o")]) == 2
+    assert "no such file" in capsys.readouterr().err
+    fake = tmp_path / "fake.mp4"
+    fake.write_text("not a video")
+    assert main(["replay", str(fake), "--out", str(tmp_path / "o2")]) == 2
+    assert "ffmpeg" in capsys.readouterr().err
+
+
+def test_project_video_sample_explains_where_fear_rose(shared_data: Path, tmp_path: Path):
+    src = shared_data / "road" / "video" / "project_video.mp4"
+    result = replay(src, tmp_path, ReplayOptions(start="20s", stop="26s", plots=False))
+    assert result.summary["processed_frames"] == 150
+    for stretch in result.summary["elevated_fear"]:
+        assert stretch["why"] and stretch["cue_at_peak"]
