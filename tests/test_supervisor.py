@@ -276,3 +276,16 @@ def test_emergency_remembers_why_it_braked_for_hold_s(guard) -> None:
     first_crawl = strategies.index(fg.Strategy.CRAWL)
     assert set(strategies[:first_crawl]) == {fg.Strategy.STOP} and 0.1 * first_crawl >= 2.0 - 1e-9
     assert set(strategies[first_crawl:]) == {fg.Strategy.CRAWL}
+
+
+def test_a_wrapped_hough_steering_shares_the_pipeline_and_the_camera() -> None:
+    cam = fg.CameraModel.default(320, 240, mount_height_m=0.15, pitch_deg=13.0)
+    steer = fg.HoughLaneSteering()
+    guard = fg.FearGuard(steer, camera=cam)
+    assert guard.perception.pipeline is steer.pipeline and steer.pipeline.camera is cam
+    frame = np.full((240, 320, 3), 90, np.uint8)  # a blank road: no lane, so vision says so
+    marker = "FG1;route=a;sector=0;pos_m=0.0"
+    cmd = guard.step(fg.Observation(t_s=0.0, speed_mps=1.0, frame=frame, ultrasonic_range_m=math.inf, qr_payload=marker))
+    assert cmd.cues.lane_confidence == 0.0 and cmd.cues.qr_staleness_s == 0.0 and math.isinf(cmd.cues.obstacle_range_m)
+    assert any(r.startswith("lane: confidence 0.00") for r in cmd.reasons)
+    assert guard.last_perception is not None and "vision" in guard.last_perception.timings_ms
