@@ -1,7 +1,12 @@
 """Exceptions a person can act on.
 
     FearguardError          base: the CLI catches it, prints ``Type: message`` and exits 2
-    └── RuleError           a rule-base file is wrong (names the file, the line or key, and the fix)
+    ├── RuleError           a rule-base file is wrong (names the file, the line or key, and the fix)
+    ├── CameraError         camera.toml is wrong (camera.py)
+    ├── CalibrationError    chessboard photos cannot calibrate (calibration.py)
+    ├── ScenarioError       a scenario file is wrong (sim/schema.py)
+    ├── SourceError         a recording cannot be read (replay/sources.py)
+    └── SensorLogError      a sensor log line is malformed, with --strict (replay/sensor_log.py)
 
 ``FearGuard.step`` never raises any of these: faults at run time become safe commands.
 """
