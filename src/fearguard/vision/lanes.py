@@ -24,6 +24,7 @@ from fearguard.camera import CameraModel
 WORK_WIDTH_PX = 320  # [px] frames are analysed at this width (aspect kept): the cost is then fixed
 TOP_FRACTION = 0.62  # [-] road region starts at this share of the height without a camera model (dash-cam horizon ≈ 0.58)
 BOTTOM_FRACTION = 0.93  # [-] and ends here (many dash-cams see their own bonnet below)
+PITCHED_DEG = 8.0  # [deg] a camera pitched down at least this much gets the near-road settings below
 SIDE_FRACTION = 0.75  # [-] of the road region's height: with a camera model, the near part searched across the full width
 HORIZON_MARGIN = 0.04  # [-] with a camera model the region starts this share of the height below the horizon
 TOPHAT_WIDTH = 0.055  # [-] top-hat window as a share of the width: wider than a far marking, narrower than a far lane
@@ -96,13 +97,14 @@ def road_region(width_px: int, height_px: int, camera: CameraModel | None = None
     if camera is not None and camera.pitch_deg != 0.0:
         top = camera.scaled_to(width_px, height_px).horizon_v_px() + HORIZON_MARGIN * height_px
     top_v = int(min(max(top, 0.0), 0.8 * height_px))
-    bottom_v = int(BOTTOM_FRACTION * height_px) if camera is None else height_px - 1
+    pitched = camera is not None and camera.pitch_deg >= PITCHED_DEG
+    bottom_v = height_px - 1 if pitched else int(BOTTOM_FRACTION * height_px)  # a dash-cam sees its bonnet below
     w = width_px - 1
-    # a camera model means a known (often low, pitched-down) camera: the lines leave through the image sides
-    side = SIDE_FRACTION if camera is not None else 0.0
+    # a low camera pitched well down (a model car's) sees the lines leave through the image sides, and wide tape
+    side = SIDE_FRACTION if pitched else 0.0
     side_v = int(bottom_v - side * (bottom_v - top_v))
     polygon = ((0, bottom_v), (0, side_v), (int(0.38 * w), top_v), (int(0.62 * w), top_v), (w, side_v), (w, bottom_v))
-    if camera is None:
+    if not pitched:
         return RoadRegion(width_px, height_px, top_v, bottom_v, polygon, TOPHAT_WIDTH, NEAR_TOPHAT_WIDTH)
     return RoadRegion(width_px, height_px, top_v, bottom_v, polygon, TOPHAT_WIDTH_PITCHED, NEAR_TOPHAT_WIDTH_PITCHED)
 
