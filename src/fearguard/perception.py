@@ -57,6 +57,7 @@ class Perception:
     ) -> None:
         self.vehicle = vehicle if vehicle is not None else VehicleLimits()
         self.pipeline = pipeline if pipeline is not None else FramePipeline(camera)
+        self.pipeline.qr = self.vehicle.has_qr_localisation  # no QR localisation on this car: no QR scan either
         self.ultrasonic = UltrasonicFilter(self.vehicle.ultrasonic_min_range_m, self.vehicle.ultrasonic_max_range_m)
         self.localiser = QrLocaliser(marker_spacing_m=marker_spacing_m)
         self._marker_spacing_m = marker_spacing_m

@@ -67,7 +67,6 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     has_us = log_data is not None and not options.no_ultrasonic and bool({"ultrasonic_range_m", "echo_s"} & set(log_data.columns))
     vehicle = VehicleLimits(**{**options.vehicle.__dict__, "has_ultrasonic": has_us, "has_qr_localisation": options.qr_localisation})
     steer = HoughLaneSteering(camera=camera, fps=source.fps)
-    steer.pipeline.qr = options.qr_localisation
     guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera)
     start = parse_position(options.start, source.fps) if options.start else 0
     stop = parse_position(options.stop, source.fps) if options.stop else None

@@ -83,36 +83,36 @@ def detect_lead(
     if cv2.countNonZero(dark) == 0:
         return None  # nothing dark in the lane: the common case, and the cheap one
     band = dark[top : bottom + 1]  # components only where the lane is (the rows above cannot hold an underside)
-    n, _labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8)
-    stats = stats.copy()
+    _n, _labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8)
+    stats = stats[1:].astype(np.int64)
     stats[:, 1] += top
+    # the shape tests, vectorised over all blobs (a noisy night frame has thousands of dark specks)
+    x, y, bw, bh, area = stats.T
+    v_bottom = y + bh - 1
+    lu, ru = left.u_at(v_bottom.astype(float)), right.u_at(v_bottom.astype(float))
+    lane_w = ru - lu
+    centre = x + 0.5 * bw
+    keep = (v_bottom < bottom - 1) & (bh <= MAX_ASPECT * bw)  # not touching the image bottom, not too tall
+    keep &= (lane_w > 0) & (bw >= WIDTH_RANGE[0] * lane_w) & (bw <= WIDTH_RANGE[1] * lane_w) & (area >= MIN_FILL * bw * bh)
+    keep &= (centre >= lu) & (centre <= ru)  # the blob's centre is inside the ego lane (else: a vehicle beside)
     best: LeadBox | None = None
     dev = max(45.0, 0.5 * reference)
-    for i in range(1, n):
-        x, y, bw, bh, area = (int(s) for s in stats[i])
-        v_bottom = y + bh - 1
-        if v_bottom >= bottom - 1 or bh > MAX_ASPECT * bw:
-            continue  # touching the image bottom (our own shadow, a dark road patch) or too tall for a vehicle
-        lane_w = right.u_at(v_bottom) - left.u_at(v_bottom)
-        if lane_w <= 0 or not (WIDTH_RANGE[0] * lane_w <= bw <= WIDTH_RANGE[1] * lane_w) or area < MIN_FILL * bw * bh:
-            continue
-        centre = x + 0.5 * bw
-        if not left.u_at(v_bottom) <= centre <= right.u_at(v_bottom):
-            continue  # the blob's centre is outside the ego lane: a vehicle beside
+    for i in np.flatnonzero(keep)[np.argsort(-v_bottom[keep])]:  # nearest first
+        x, y, bw, bh, v_bottom_i = (int(a) for a in (stats[i, 0], stats[i, 1], stats[i, 2], stats[i, 3], v_bottom[i]))
         box_h = max(bh, int(ASPECT * bw))
-        y0 = max(0, v_bottom - box_h + 1)
+        y0 = max(0, v_bottom_i - box_h + 1)
         y_road = max(y0, top)  # judge "not road" only on the road region (above it: sky and trees are foreign anyway)
-        patch = gray[y_road : v_bottom + 1, x : x + bw].astype(np.float32)
-        sat = hls[y_road : v_bottom + 1, x : x + bw, 2]
+        patch = gray[y_road : v_bottom_i + 1, x : x + bw].astype(np.float32)
+        sat = hls[y_road : v_bottom_i + 1, x : x + bw, 2]
         foreign = (np.abs(patch - reference) > dev) | (sat >= 110)
         if foreign.mean() < ABOVE_FOREIGN_MIN:
             continue
-        hue = hls[y0 : v_bottom + 1, x : x + bw, 0]
-        red = ((hue <= RED_HUE_MAX) | (hue >= 180 - RED_HUE_MAX)) & (hls[y0 : v_bottom + 1, x : x + bw, 2] >= RED_SAT_MIN)
+        hue = hls[y0 : v_bottom_i + 1, x : x + bw, 0]
+        red = ((hue <= RED_HUE_MAX) | (hue >= 180 - RED_HUE_MAX)) & (hls[y0 : v_bottom_i + 1, x : x + bw, 2] >= RED_SAT_MIN)
         if red.mean() < TAIL_LIGHT_SHARE:
             continue  # no tail lights: a shadow or a dark patch, not the rear of a vehicle
-        if best is None or v_bottom > best.y_px + best.h_px - 1:
-            best = LeadBox(float(x), float(y0), float(bw), float(v_bottom - y0 + 1))
+        best = LeadBox(float(x), float(y0), float(bw), float(v_bottom_i - y0 + 1))
+        break
     return best
 
 
