@@ -150,6 +150,12 @@ def test_thorough_decodes_every_sharp_board_from_60px_tilted_up_to_40deg(roads) 
     assert grid_failures(roads, (60,), TILTS_DEG, ROLLS_DEG, 0.0, thorough=True) == []
 
 
+def test_thorough_decodes_slightly_soft_boards_from_70px_and_all_but_one_at_60px(roads) -> None:
+    """Gaussian blur sigma 0.5 px (a slightly soft lens): 18/18 at 70 px; at 60 px only pitch −30° rolled 90° fails."""
+    assert grid_failures(roads, (70,), TILTS_DEG, ROLLS_DEG, 0.5, thorough=True) == []
+    assert grid_failures(roads, (60,), TILTS_DEG, ROLLS_DEG, 0.5, thorough=True) == [(60, 0, -30, 90)]
+
+
 def test_thorough_decodes_every_blurred_board_from_100px(roads) -> None:
     """Gaussian blur sigma 1 px (a soft lens): below ~100 px the modules blur into each other (docs/qr.md)."""
     assert grid_failures(roads, (100, 120), TILTS_DEG, (0, 90), 1.0, thorough=True) == []
