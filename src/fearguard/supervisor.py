@@ -188,8 +188,8 @@ class FearGuard:
             if plan.steering_deg is not None:
                 out_steering = plan.steering_deg
             reasons.append(f"EMERGENCY {strategy.name}: {plan.why}")
-        elif result.cause_fears[Cause.ROAD] < cfg.emergency_exit_fear:
-            st.trusted_steering_deg = steering  # the road picture is trusted: remember its steering
+        elif result.cause_fears[Cause.ROAD] < cfg.caution_fear:
+            st.trusted_steering_deg = steering  # the road picture is calm: remember its steering (held if it is lost)
         if imminent:
             reasons.append(f"imminent collision: obstacle at {range_m:.2f} m, cannot stop from {speed_now:.2f} m/s")
         if event:

@@ -146,6 +146,12 @@ def check_expectations(expectations: Expectations, summary: Mapping[str, Any], t
             add(name, False, "no supervisor mode recorded (unguarded run): this expectation needs a guarded run")
         return not guarded
 
+    def no_false_alarm_possible(name: str) -> bool:
+        """False-alarm limits hold vacuously for a car without a supervisor: it has no modes to switch."""
+        if not guarded:
+            add(name, True, "no supervisor (unguarded run): no mode, so no false alarm")
+        return not guarded
+
     collisions = int(summary.get("collisions", 0))
     if e.no_collision is not None:
         when = f" (first at {summary.get('first_collision_t_s')} s)" if collisions else ""
@@ -159,14 +165,14 @@ def check_expectations(expectations: Expectations, summary: Mapping[str, Any], t
     _at_most(add, "max_mean_speed_mps", e.max_mean_speed_mps, summary.get("mean_speed_mps"), "m/s mean speed")
     _at_least(add, "min_distance_m", e.min_distance_m, summary.get("distance_m"), "m driven")
     _at_most(add, "max_distance_m", e.max_distance_m, summary.get("distance_m"), "m driven")
-    if e.no_emergency is not None and not unguarded("no_emergency"):
+    if e.no_emergency is not None and not no_false_alarm_possible("no_emergency"):
         t_em = summary.get("time_in_mode_s", {}).get("EMERGENCY", 0.0)
         add("no_emergency", (t_em == 0.0) == e.no_emergency,
             f"{summary.get('emergency_entries', 0)} EMERGENCY entr(ies), {t_em:.2f} s in EMERGENCY")
-    if e.max_emergency_entries is not None and not unguarded("max_emergency_entries"):
+    if e.max_emergency_entries is not None and not no_false_alarm_possible("max_emergency_entries"):
         n = int(summary.get("emergency_entries", 0))
         add("max_emergency_entries", n <= e.max_emergency_entries, f"{n} EMERGENCY entr(ies), at most {e.max_emergency_entries} allowed")
-    if e.max_mode_switches is not None and not unguarded("max_mode_switches"):
+    if e.max_mode_switches is not None and not no_false_alarm_possible("max_mode_switches"):
         n = int(summary.get("mode_switches", 0))
         add("max_mode_switches", n <= e.max_mode_switches, f"{n} mode switch(es), at most {e.max_mode_switches} allowed")
     if e.stopped_before_obstacle is not None:
