@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import textwrap
 from pathlib import Path
 
 import cv2
@@ -14,8 +13,10 @@ from hypothesis import strategies as st
 
 from fearguard.camera import CameraModel
 from fearguard.sim.render import _clip_near
-from fearguard.sim.scenario import Scenario, load_scenario
+from fearguard.sim.scenario import Scenario
 from fearguard.sim.world import World
+
+from .scenario_text import scenario_from
 
 ROAD = """
 [road]
@@ -29,9 +30,7 @@ length_m = 20.0
 
 
 def scenario(tmp_path: Path, body: str = "", head: str = "") -> Scenario:
-    path = tmp_path / "r.toml"
-    path.write_text(textwrap.dedent(head) + ROAD + textwrap.dedent(body))
-    return load_scenario(path)
+    return scenario_from(tmp_path, head, ROAD, body, "r.toml")
 
 
 def pixel_of(world: World, s_m: float, lateral_m: float, up_m: float = 0.0) -> tuple[int, int]:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import hashlib
 import math
-import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -14,6 +13,8 @@ from fearguard.sim.scenario import Scenario, load_scenario
 from fearguard.sim.traffic import traffic_speed_mps
 from fearguard.sim.world import World
 
+from .scenario_text import scenario_from
+
 STRAIGHT = """
 [[road.segments]]
 kind = "straight"
@@ -22,9 +23,7 @@ length_m = 20.0
 
 
 def scenario(tmp_path: Path, body: str = "", head: str = "") -> Scenario:
-    path = tmp_path / "w.toml"
-    path.write_text(textwrap.dedent(head) + STRAIGHT + textwrap.dedent(body))
-    return load_scenario(path)
+    return scenario_from(tmp_path, head, STRAIGHT, body, "w.toml")
 
 
 def test_start_pose_and_truth_on_an_empty_road(tmp_path: Path) -> None:

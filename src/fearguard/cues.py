@@ -78,12 +78,20 @@ class Cues:
         return np.array(self.values(), dtype=float)
 
 
-def finite_number(value: object) -> float | None:
-    """A finite real number as float, else None (bools, strings and NaN/inf are not numbers here)."""
+def real_number(value: object) -> float | None:
+    """A real number as float (NaN and inf kept), else None: bools, strings, arrays are not readings."""
     if isinstance(value, bool) or not isinstance(value, Real):
         return None
-    f = float(value)
-    return f if math.isfinite(f) else None
+    try:
+        return float(value)
+    except (OverflowError, ValueError, TypeError):
+        return None
+
+
+def finite_number(value: object) -> float | None:
+    """A finite real number as float, else None (bools, strings and NaN/inf are not numbers here)."""
+    f = real_number(value)
+    return f if f is not None and math.isfinite(f) else None
 
 
 def _to_float(value: object) -> float:

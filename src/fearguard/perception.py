@@ -12,12 +12,11 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from numbers import Real
 
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.cues import Cues
+from fearguard.cues import Cues, real_number
 from fearguard.policy import Lead
 from fearguard.sensors.localisation import LocalisationState, QrLocaliser
 from fearguard.sensors.ultrasonic import RangeEstimate, UltrasonicFilter
@@ -42,10 +41,6 @@ class Perceived:
     range_estimate: RangeEstimate | None = None
     localisation: LocalisationState | None = None
     timings_ms: dict[str, float] = field(default_factory=dict)
-
-
-def _number(value: object) -> float | None:
-    return float(value) if isinstance(value, Real) and not isinstance(value, bool) else None
 
 
 class Perception:
@@ -74,7 +69,7 @@ class Perception:
         """Cues for one Observation (any object with its fields; missing fields count as missing readings)."""
         clock = time.perf_counter
         t0 = clock()
-        t_s = _number(getattr(obs, "t_s", None))
+        t_s = real_number(getattr(obs, "t_s", None))
         t = t_s if t_s is not None else _NAN
         reasons: list[str] = []  # alerts
         facts: list[str] = []
@@ -156,7 +151,7 @@ class Perception:
         given = getattr(obs, "qr_payload", None)
         if given is not None:
             payloads.append(given)
-        state = self.localiser.update(t, payloads, _number(getattr(obs, "odometer_m", None)))
+        state = self.localiser.update(t, payloads, real_number(getattr(obs, "odometer_m", None)))
         reasons.extend(state.reasons)
         return state.staleness_s, state
 

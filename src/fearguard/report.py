@@ -43,11 +43,7 @@ def json_value(value: Any) -> Any:
 
 def from_json_number(value: Any) -> float:
     """The inverse of json_value for numbers: null → NaN, "inf" → inf."""
-    if value is None:
-        return math.nan
-    if isinstance(value, str):
-        return float(value)
-    return float(value)
+    return math.nan if value is None else float(value)
 
 
 def command_record(frame: int, t_s: float, cmd: Command | None, **extra: Any) -> dict[str, Any]:

@@ -13,7 +13,7 @@ import json
 import math
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -65,7 +65,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     log_data: SensorLog | None = load_sensor_log(options.sensor_log, options.strict) if options.sensor_log else None
     camera: CameraModel | None = load_camera(options.camera) if options.camera else None
     has_us = log_data is not None and not options.no_ultrasonic and bool({"ultrasonic_range_m", "echo_s"} & set(log_data.columns))
-    vehicle = VehicleLimits(**{**options.vehicle.__dict__, "has_ultrasonic": has_us, "has_qr_localisation": options.qr_localisation})
+    vehicle = replace(options.vehicle, has_ultrasonic=has_us, has_qr_localisation=options.qr_localisation)
     steer = HoughLaneSteering(camera=camera, fps=source.fps)
     guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera)
     start = parse_position(options.start, source.fps) if options.start else 0
@@ -76,7 +76,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     interrupted, done, began = False, 0, time.perf_counter()
     try:
         for frame in source.iter_frames(start, stop, options.every):
-            obs = _observation(frame.t_s, frame.image_bgr, log_data, options.speed_mps, vehicle)
+            obs = _observation(frame.t_s, frame.image_bgr, log_data, options.speed_mps)
             cmd = guard.step(obs)
             extra: dict[str, Any] = {}
             if "user/angle" in frame.record:
@@ -117,7 +117,7 @@ def _expected(total: int | None, start: int, stop: int | None, every: int) -> in
     return None if end is None else max(0, math.ceil((min(end, total or end) - start) / every))
 
 
-def _observation(t_s: float, image: Any, log: SensorLog | None, speed_mps: float | None, vehicle: VehicleLimits) -> Observation:
+def _observation(t_s: float, image: Any, log: SensorLog | None, speed_mps: float | None) -> Observation:
     """The Observation for one frame: the frame, and the sensor-log row valid at its time."""
     if log is None:
         return Observation(t_s, speed_mps if speed_mps is not None else math.nan, image)

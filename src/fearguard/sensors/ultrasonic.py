@@ -18,11 +18,12 @@ import math
 from collections import deque
 from dataclasses import dataclass
 from enum import Enum
-from numbers import Real
 
 import numpy as np
 from filterpy.common import Q_discrete_white_noise
 from filterpy.kalman import KalmanFilter
+
+from fearguard.cues import real_number
 
 HALF_SPEED_OF_SOUND_MPS = 171.5  # [m/s] 343 m/s at 20 °C, halved: the echo travels there and back (17150 cm/s)
 HC_SR04_MIN_RANGE_M = 0.15  # [m] 6 in (0.1524 m), lower end of the usable range reported for the HC-SR04
@@ -80,19 +81,9 @@ class RangeEstimate:
 
 
 # -- pure helpers ---------------------------------------------------------------------------
-def _real(value: object) -> float | None:
-    """A real number as float (NaN and inf kept), else None: bools, strings, arrays are not readings."""
-    if isinstance(value, bool) or not isinstance(value, Real):
-        return None
-    try:
-        return float(value)
-    except (OverflowError, ValueError, TypeError):
-        return None
-
-
 def echo_to_range_m(echo_s: object) -> float | None:
     """Echo pulse width (s) → range (m) = 171.5 × echo; None for NaN, ≤ 0 or non-numbers (inf stays inf)."""
-    echo = _real(echo_s)
+    echo = real_number(echo_s)
     if echo is None or math.isnan(echo) or echo <= 0:
         return None
     return HALF_SPEED_OF_SOUND_MPS * echo
@@ -102,7 +93,7 @@ def classify_reading(range_m: object, min_range_m: float = HC_SR04_MIN_RANGE_M, 
     """Sort a raw range into none / invalid (with the reason) / clear (nothing in range) / a usable range."""
     if range_m is None:
         return Reading(ReadingKind.NONE, math.nan, "no reading")
-    value = _real(range_m)
+    value = real_number(range_m)
     if value is None:
         return Reading(ReadingKind.INVALID, math.nan, f"reading {_short(range_m)} is not a number")
     if math.isnan(value):
@@ -207,7 +198,7 @@ class UltrasonicFilter:
 
     def _update(self, t_s: object, range_m: object, echo_s: object) -> RangeEstimate:
         reading = self._reading(range_m, echo_s)
-        t = _real(t_s)
+        t = real_number(t_s)
         if t is None or not math.isfinite(t):
             return _unknown(reading.value_m, f"ultrasonic: time t_s={_short(t_s)} is not a finite number: range unknown")
         if self._last_t_s is not None and t <= self._last_t_s:

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from fearguard.cues import finite_number
 from fearguard.sim.scenario import Expectations
 from fearguard.sim.world import Truth
 
@@ -65,7 +66,7 @@ class Metrics:
         """Record one frame (mode/strategy: names, enum members, or None for an unguarded run)."""
         self.rows.append(Row(truth.t_s, truth.x_m, truth.y_m, truth.s_m, truth.lateral_m, truth.speed_mps, truth.gap_m, truth.ttc_s,
                              truth.collided, truth.in_lane, truth.lat_accel_mps2, truth.finished, _name(mode), _name(strategy),
-                             _number(speed_limit_mps), _number(fear)))
+                             finite_number(speed_limit_mps), finite_number(fear)))
 
     @property
     def timeline(self) -> list[dict[str, Any]]:
@@ -184,18 +185,13 @@ def check_expectations(expectations: Expectations, summary: Mapping[str, Any], t
     _at_least(add, "min_gap_m", e.min_gap_m, summary.get("min_gap_m"), "m smallest gap", none="no object ahead at any time")
     _at_least(add, "min_ttc_s", e.min_ttc_s, summary.get("min_ttc_s"), "s smallest time to collision", none="never closing in")
     _at_most(add, "max_lat_accel_mps2", e.max_lat_accel_mps2, summary.get("peak_lat_accel_mps2"), "m/s² peak lateral acceleration")
-    for want in e.mode_by:
-        name = f"mode_by {want.mode} by {want.t_s:g} s"
+    by = [("mode", w.mode, w.t_s) for w in e.mode_by] + [("strategy", w.strategy, w.t_s) for w in e.strategy_by]
+    for field, value, t_s in by:  # "reach this mode / strategy by t_s"
+        name = f"{field}_by {value} by {t_s:g} s"
         if not unguarded(name):
-            first = next((r["t_s"] for r in rows if r["mode"] == want.mode), None)
-            add(name, first is not None and first <= want.t_s + 1e-9, f"first {want.mode} at {first:.2f} s" if first is not None
-                else f"never {want.mode}")
-    for want_s in e.strategy_by:
-        name = f"strategy_by {want_s.strategy} by {want_s.t_s:g} s"
-        if not unguarded(name):
-            first = next((r["t_s"] for r in rows if r["strategy"] == want_s.strategy), None)
-            add(name, first is not None and first <= want_s.t_s + 1e-9, f"first {want_s.strategy} at {first:.2f} s" if first is not None
-                else f"never {want_s.strategy}")
+            first = next((r["t_s"] for r in rows if r[field] == value), None)
+            detail = f"first {value} at {first:.2f} s" if first is not None else f"never {value}"
+            add(name, first is not None and first <= t_s + 1e-9, detail)
     for want in e.mode_not_before:
         name = f"mode_not_before {want.mode} before {want.t_s:g} s"
         if not unguarded(name):
@@ -254,16 +250,6 @@ def _name(value: object) -> str | None:
     return str(getattr(value, "name", value))
 
 
-def _number(value: object) -> float | None:
-    if value is None or isinstance(value, bool):
-        return None
-    try:
-        f = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        return None
-    return f if math.isfinite(f) else None
-
-
 def _json(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
@@ -272,7 +258,7 @@ def _row_view(row: Any) -> dict[str, Any]:
     """A timeline row as a dict with t_s, mode, strategy, speed_mps, s_m (dicts and objects alike)."""
     get = row.get if isinstance(row, Mapping) else (lambda k, d=None: getattr(row, k, d))
     def num(key: str) -> float:
-        value = _number(get(key))
+        value = finite_number(get(key))
         return math.nan if value is None else value
 
     return {"t_s": num("t_s"), "mode": _name(get("mode")), "strategy": _name(get("strategy")), "speed_mps": num("speed_mps"),

@@ -14,6 +14,7 @@ import time
 from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -96,8 +97,8 @@ class FramePipeline:
         self.leads = LeadTracker()
         self.memory = LaneMemory()
         self._frames = 0
-        self._last: tuple[int, FrameAnalysis] | None = None
-        self._last_frame: np.ndarray | None = None
+        self._last_frame: np.ndarray | None = None  # the array the cached result belongs to
+        self._last_result: FrameAnalysis | None = None
         self._confidences: deque[float] = deque(maxlen=CONFIDENCE_MEDIAN_FRAMES)
 
     def steady_confidence(self, confidence: float) -> float:
@@ -110,13 +111,14 @@ class FramePipeline:
 
     def process(self, frame: object, t_s: float | None = None, lead_box: LeadBox | None = None) -> FrameAnalysis:
         """Analyse a frame (once: the same array object again returns the cached result)."""
-        if self._last is not None and self._last_frame is frame:
-            return self._last[1]
+        if self._last_result is not None and self._last_frame is frame:
+            return self._last_result
         self._frames += 1
         t = t_s if t_s is not None and math.isfinite(t_s) else self._frames * self.period_s
         scan_qr = self.qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
         result = _analyze(frame, self.camera, self, t, lead_box, scan_qr)
-        self._last, self._last_frame = (id(frame), result), frame if isinstance(frame, np.ndarray) else None
+        self._last_frame = frame if isinstance(frame, np.ndarray) else None
+        self._last_result = result
         return result
 
 
@@ -145,8 +147,7 @@ def _analyze(
     ww, wh = work_size(fw, fh)
     work = bgr if (ww, wh) == (fw, fh) else cv2.resize(bgr, (ww, wh), interpolation=cv2.INTER_AREA)
     scale = fw / ww
-    region = road_region(ww, wh, camera)
-    mask = region_mask(region)
+    region, mask = _region_and_mask(ww, wh, camera)
     gray, hls = _band_conversions(work, region)
     t1 = clock()
     exposure = road_exposure(gray, mask)
@@ -202,6 +203,15 @@ def _analyze(
         confidence, exposure.brightness, occ, lead, payloads, steering, exposure, evidence, left, right, region,
         scale, box, reference, tuple(reasons), timings,
     )
+
+
+@lru_cache(maxsize=8)
+def _region_and_mask(width_px: int, height_px: int, camera: CameraModel | None) -> tuple[RoadRegion, np.ndarray]:
+    """Road region and its mask for a working size and camera: the same every frame, so built once (read-only)."""
+    region = road_region(width_px, height_px, camera)
+    mask = region_mask(region)
+    mask.flags.writeable = False
+    return region, mask
 
 
 def _band_conversions(work: np.ndarray, region: RoadRegion) -> tuple[np.ndarray, np.ndarray]:

@@ -69,13 +69,18 @@ def row_references(gray: np.ndarray, region: RoadRegion, rows: np.ndarray, inter
     return np.where(n > 0, med, np.nan)
 
 
+def sample_rows(region: RoadRegion) -> np.ndarray:
+    """The working-image rows the expected marking region is sampled on."""
+    return np.arange(region.top_v_px, region.bottom_v_px + 1, ROW_STEP)
+
+
 def hidden_samples(
     gray: np.ndarray, hls: np.ndarray, features: np.ndarray, region: RoadRegion, line: LaneLine, reference: float,
-    interior: tuple[LaneLine, LaneLine], boxes: tuple[tuple[int, int, int, int], ...] = (),
+    row_ref: np.ndarray, boxes: tuple[tuple[int, int, int, int], ...] = (),
 ) -> tuple[int, int]:
-    """(hidden, total) samples along one expected boundary (vectorised over rows)."""
+    """(hidden, total) samples along one expected boundary (vectorised over rows); row_ref: row_references on sample_rows."""
     half = max(2, int(BAND * region.width_px))
-    rows = np.arange(region.top_v_px, region.bottom_v_px + 1, ROW_STEP)
+    rows = sample_rows(region)
     centre = np.rint(line.u_at(rows.astype(float))).astype(np.int64) if len(rows) else rows
     offsets = np.arange(-half, half + 1)
     cols = centre[:, None] + offsets[None, :]
@@ -83,13 +88,12 @@ def hidden_samples(
     seen = inside.any(axis=1)  # rows where the band is in the image at all
     if not seen.any():
         return 0, 0
-    rows, cols, inside = rows[seen], cols[seen], inside[seen]
+    rows, cols, inside, row_ref = rows[seen], cols[seen], inside[seen], row_ref[seen]
     clipped = np.clip(cols, 0, region.width_px - 1)  # a band running off the image repeats its edge pixel
     r = rows[:, None]
     paint = (features[r, clipped] > 0) & inside
     dev = max(FOREIGN_DEV_MIN, FOREIGN_DEV * reference)
     grey = np.median(gray[r, clipped], axis=1)
-    row_ref = row_references(gray, region, rows, interior)
     row_dev = np.maximum(FOREIGN_DEV_MIN, FOREIGN_DEV * row_ref)
     foreign = (np.abs(grey - reference) > dev) & (np.abs(grey - row_ref) > row_dev)
     sat = np.median(hls[r, clipped, 2], axis=1)
@@ -107,7 +111,8 @@ def occlusion(
     reference: float, boxes: tuple[tuple[int, int, int, int], ...] = (),
 ) -> float:
     """Occlusion 0..1 over both expected boundaries (1 when no boundary is in view at all)."""
-    h_l, n_l = hidden_samples(gray, hls, features, region, left, reference, (left, right), boxes)
-    h_r, n_r = hidden_samples(gray, hls, features, region, right, reference, (left, right), boxes)
+    row_ref = row_references(gray, region, sample_rows(region), (left, right))  # the same rows for both boundaries
+    h_l, n_l = hidden_samples(gray, hls, features, region, left, reference, row_ref, boxes)
+    h_r, n_r = hidden_samples(gray, hls, features, region, right, reference, row_ref, boxes)
     n = n_l + n_r
     return float((h_l + h_r) / n) if n else 1.0
