@@ -12,7 +12,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from fearguard.camera import CameraModel
-from fearguard.sim.render import _clip_near
+from fearguard.sim.projection import clip_near as _clip_near
 from fearguard.sim.scenario import Scenario
 from fearguard.sim.world import World
 

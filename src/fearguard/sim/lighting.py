@@ -16,7 +16,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from fearguard.sim.scenario import LightingZone
+from fearguard.sim.scenario_values import LightingZone
 
 BASE_NOISE_SIGMA = 2.0  # [grey levels] sensor noise in daylight
 NIGHT_NOISE_SIGMA = 6.0  # [grey levels] extra noise at full night (high gain)

@@ -22,7 +22,7 @@ from fearguard.overlay import VideoOut, annotate
 from fearguard.report import JsonlLog, command_record
 from fearguard.sim.baselines import BASELINES, Baseline
 from fearguard.sim.metrics import Metrics, check_expectations
-from fearguard.sim.scenario import Scenario, SteeringFault
+from fearguard.sim.scenario_values import Scenario, SteeringFault
 from fearguard.sim.world import World
 from fearguard.supervisor import Command, FearGuard, Observation
 from fearguard.vision.lane_steering import HoughLaneSteering

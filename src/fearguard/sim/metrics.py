@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from fearguard.cues import finite_number
-from fearguard.sim.scenario import Expectations
+from fearguard.sim.scenario_values import Expectations
 from fearguard.sim.world import Truth
 
 MODES = ("NORMAL", "CAUTION", "EMERGENCY")

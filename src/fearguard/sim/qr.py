@@ -13,7 +13,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-from fearguard.sim.scenario import QrBoardGroup, RoadSpec
+from fearguard.sim.scenario_values import QrBoardGroup, RoadSpec
 
 QUIET_MODULES = 2  # [modules] white border the encoder adds; the board's white frame adds as much again
 BOARD_MARGIN = 0.03  # [-] white frame around the code (beyond its quiet zone), share of the board side

@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from fearguard.sim.scenario import RoadSpec, Segment
+from fearguard.sim.scenario_values import RoadSpec, Segment
 
 _EPS_CURVATURE = 1e-12  # [1/m] below this a segment is treated as straight
 

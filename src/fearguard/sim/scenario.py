@@ -5,6 +5,9 @@ camera, the rule file, the ego vehicle's limits, the road as a list of straight/
 their markings, other vehicles with speed profiles and braking events, static obstacles, QR boards,
 lighting zones, sensor faults, a steering-estimator fault, and the expectations a safe run meets.
 The format, key by key, is in docs/scenarios.md. Errors name the file, the line and the key path.
+
+This module is the loading half: the values themselves live in ``scenario_values.py`` (the world, the
+renderer and the metrics import them from there, without the TOML reader) and are re-exported here.
 """
 
 from __future__ import annotations
@@ -12,16 +15,45 @@ from __future__ import annotations
 import math
 import re
 import tomllib
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fearguard.camera import CameraModel
 from fearguard.fuzzy.loader import bundled_rules_path
 from fearguard.policy import Mode, Strategy
 from fearguard.sim.scales import SCALES, scale_defaults
+from fearguard.sim.scenario_values import (
+    COLOURS,
+    EXPECTATION_NAMES,
+    LANES,
+    LIGHTING_KINDS,
+    MARKING_COLOURS,
+    MARKING_STYLES,
+    SIDES,
+    STEERING_FAULT_KINDS,
+    SURFACES,
+    BrakingEvent,
+    CameraFaults,
+    CameraSpec,
+    EgoStart,
+    Expectations,
+    Faults,
+    LightingZone,
+    Marking,
+    ModeBy,
+    ObstacleSpec,
+    QrBoardGroup,
+    RoadSpec,
+    Scenario,
+    Segment,
+    SensorSpec,
+    SpeedCap,
+    SteeringFault,
+    StrategyBy,
+    TrafficVehicle,
+    UltrasonicFaults,
+    VehicleProfile,
+)
 from fearguard.sim.schema import ScenarioError, Table, TomlSource, is_number
-from fearguard.vehicle import VehicleLimits
 
 __all__ = [
     "BrakingEvent",
@@ -49,335 +81,16 @@ __all__ = [
     "load_scenario",
 ]
 
-MARKING_STYLES = ("solid", "dashed", "none")
-MARKING_COLOURS = ("white", "yellow")
-SURFACES = ("asphalt", "pale")
-LANES = ("ego", "left", "right")
-SIDES = ("left", "right")
-LIGHTING_KINDS = ("normal", "night", "glare", "tunnel_exit", "shadows")
-STEERING_FAULT_KINDS = ("raise", "nan", "stuck", "bias")
-COLOURS = ("red", "blue", "white", "black", "silver", "green", "yellow", "orange", "grey")
 MAX_DURATION_S = 3600.0  # [s] a longer run is almost surely a unit mistake
 ROUTE_NAME = re.compile(r"^[A-Za-z0-9_-]{1,16}$")  # route names go inside QR payloads (no ';' or '=')
 
 
-# -- values ------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class CameraSpec:
-    """The simulated forward camera: frame rate, size, field of view, and where it sits on the car."""
-
-    fps: float
-    width_px: int
-    height_px: int
-    hfov_deg: float
-    mount_height_m: float
-    pitch_deg: float
-    forward_m: float  # ahead of the rear axle
-
-    def model(self) -> CameraModel:
-        """The pinhole CameraModel (no distortion) used to render and to analyse frames."""
-        return CameraModel.default(self.width_px, self.height_px, self.hfov_deg, self.mount_height_m, self.pitch_deg)
-
-
-@dataclass(frozen=True)
-class VehicleProfile:
-    """The ego car: what the supervisor assumes (VehicleLimits fields) and what the car physically does."""
-
-    max_speed_mps: float
-    max_decel_mps2: float
-    reaction_time_s: float
-    stop_margin_m: float
-    max_steering_deg: float
-    has_ultrasonic: bool
-    has_qr_localisation: bool
-    wheelbase_m: float
-    width_m: float
-    length_m: float
-    height_m: float
-    cruise_speed_mps: float
-    max_accel_mps2: float
-    max_brake_mps2: float
-    max_steering_rate_dps: float
-
-    @property
-    def limits(self) -> VehicleLimits:
-        """The supervisor's view of this car."""
-        return VehicleLimits(self.max_speed_mps, self.max_decel_mps2, self.reaction_time_s, self.stop_margin_m,
-                             self.max_steering_deg, self.has_ultrasonic, self.has_qr_localisation)
-
-    @property
-    def rear_overhang_m(self) -> float:
-        """Rear bumper behind the rear axle (overhangs are taken equal front and back)."""
-        return (self.length_m - self.wheelbase_m) / 2.0
-
-
-@dataclass(frozen=True)
-class EgoStart:
-    start_s_m: float  # rear axle, along the route
-    lateral_m: float  # + = left of the lane centre
-    heading_deg: float  # relative to the road
-    speed_mps: float
-
-
-@dataclass(frozen=True)
-class Marking:
-    style: str  # solid | dashed | none
-    colour: str  # white | yellow
-
-
-@dataclass(frozen=True)
-class Segment:
-    """One piece of road: straight, or an arc of ``radius_m`` turning left/right."""
-
-    kind: str
-    length_m: float
-    radius_m: float = math.inf
-    turn: str | None = None
-    left: Marking = Marking("solid", "white")
-    right: Marking = Marking("solid", "white")
-    surface: str = "asphalt"
-
-    @property
-    def curvature_per_m(self) -> float:
-        """Signed curvature (+ = left)."""
-        if self.kind == "straight":
-            return 0.0
-        return (1.0 if self.turn == "left" else -1.0) / self.radius_m
-
-
-@dataclass(frozen=True)
-class RoadSpec:
-    lane_width_m: float
-    marking_width_m: float
-    dash_length_m: float
-    dash_gap_m: float
-    shoulder_m: float
-    lanes_left: int
-    lanes_right: int
-    outer: Marking  # edge lines of the extra lanes (if any)
-    segments: tuple[Segment, ...]
-
-    @property
-    def length_m(self) -> float:
-        return sum(seg.length_m for seg in self.segments)
-
-    def lane_offset_m(self, lane: str) -> float:
-        """Lateral position of a lane's centre (+ = left of the ego lane centre)."""
-        return {"ego": 0.0, "left": self.lane_width_m, "right": -self.lane_width_m}[lane]
-
-
-@dataclass(frozen=True)
-class BrakingEvent:
-    t_s: float
-    decel_mps2: float
-    to_speed_mps: float
-
-
-@dataclass(frozen=True)
-class TrafficVehicle:
-    """Another car: its lane, start position (centre, along the route) and speed over time."""
-
-    lane: str
-    start_s_m: float
-    lateral_m: float  # offset from its lane centre
-    speed_profile: tuple[tuple[float, float], ...]  # (t_s, speed_mps), linear in between, held outside
-    braking: tuple[BrakingEvent, ...]
-    length_m: float
-    width_m: float
-    height_m: float
-    colour: str
-
-
-@dataclass(frozen=True)
-class ObstacleSpec:
-    s_m: float  # centre, along the route
-    lateral_m: float
-    length_m: float
-    width_m: float
-    height_m: float
-    colour: str
-
-
-@dataclass(frozen=True)
-class QrBoardGroup:
-    """Boards every ``spacing_m`` from ``start_m``; indices in ``missing`` are not there."""
-
-    start_m: float
-    spacing_m: float
-    count: int
-    route: str
-    missing: tuple[int, ...]
-    side: str
-    size_m: float
-    offset_m: float
-    elevation_m: float
-
-
-@dataclass(frozen=True)
-class LightingZone:
-    """A lighting condition over a stretch of route (from_m..to_m) or a time window (from_s..to_s)."""
-
-    kind: str
-    from_m: float | None = None
-    to_m: float | None = None
-    from_s: float | None = None
-    to_s: float | None = None
-    strength: float = 1.0  # [0..1] 0 = normal light, 1 = the full effect
-    density: float = 0.3  # [0..1] shadows: share of the ground covered
-
-    def active(self, s_m: float, t_s: float) -> bool:
-        if self.from_m is not None and self.to_m is not None:
-            return self.from_m <= s_m < self.to_m
-        if self.from_s is not None and self.to_s is not None:
-            return self.from_s <= t_s < self.to_s
-        return True
-
-    def progress(self, s_m: float, t_s: float) -> float:
-        """How far through the zone (0..1) the car is; 0 for an unbounded zone."""
-        if self.from_m is not None and self.to_m is not None:
-            return min(1.0, max(0.0, (s_m - self.from_m) / (self.to_m - self.from_m)))
-        if self.from_s is not None and self.to_s is not None:
-            return min(1.0, max(0.0, (t_s - self.from_s) / (self.to_s - self.from_s)))
-        return 0.0
-
-
-@dataclass(frozen=True)
-class SensorSpec:
-    min_range_m: float
-    max_range_m: float
-    cone_deg: float
-    noise_m: float
-    odometer_noise_fraction: float
-    speed_noise_mps: float
-
-
-@dataclass(frozen=True)
-class UltrasonicFaults:
-    dropouts: tuple[tuple[float, float], ...] = ()  # [s] intervals reading None
-    dropout_probability: float = 0.0  # [-] per reading, None
-    spike_probability: float = 0.0  # [-] per reading, a random range
-
-
-@dataclass(frozen=True)
-class CameraFaults:
-    black: tuple[tuple[float, float], ...] = ()  # [s] intervals of all-zero frames
-    frozen: tuple[tuple[float, float], ...] = ()  # [s] intervals repeating the last good frame
-
-
-@dataclass(frozen=True)
-class SteeringFault:
-    """The wrapped steering estimator misbehaves from t_s to until_s (the closed loop applies it)."""
-
-    t_s: float
-    until_s: float
-    kind: str  # raise | nan | stuck (returns value) | bias (adds value)
-    value: float = 0.0  # [deg]
-
-    def active(self, t_s: float) -> bool:
-        return self.t_s <= t_s < self.until_s
-
-
-@dataclass(frozen=True)
-class Faults:
-    ultrasonic: UltrasonicFaults = UltrasonicFaults()
-    camera: CameraFaults = CameraFaults()
-    steering: tuple[SteeringFault, ...] = ()
-
-
-@dataclass(frozen=True)
-class ModeBy:
-    t_s: float
-    mode: str
-
-
-@dataclass(frozen=True)
-class StrategyBy:
-    t_s: float
-    strategy: str
-
-
-@dataclass(frozen=True)
-class SpeedCap:
-    """Speed stays at or below ``max_speed_mps`` over a time window or a stretch of route."""
-
-    max_speed_mps: float
-    t_s: float | None = None
-    until_s: float | None = None
-    from_m: float | None = None
-    to_m: float | None = None
-
-
-@dataclass(frozen=True)
-class Expectations:
-    """What a safe run must achieve; None = not checked. Each is documented in docs/scenarios.md."""
-
-    no_collision: bool | None = None
-    no_lane_departure: bool | None = None
-    max_time_outside_lane_s: float | None = None
-    min_mean_speed_mps: float | None = None
-    max_mean_speed_mps: float | None = None
-    min_distance_m: float | None = None
-    max_distance_m: float | None = None
-    no_emergency: bool | None = None
-    max_emergency_entries: int | None = None
-    max_mode_switches: int | None = None
-    stopped_before_obstacle: bool | None = None
-    min_gap_m: float | None = None
-    min_ttc_s: float | None = None
-    max_lat_accel_mps2: float | None = None
-    mode_by: tuple[ModeBy, ...] = ()
-    strategy_by: tuple[StrategyBy, ...] = ()
-    mode_not_before: tuple[ModeBy, ...] = ()
-    max_speed_between: tuple[SpeedCap, ...] = ()
-
-    def names(self) -> list[str]:
-        """The expectations that are set, in the order they are checked."""
-        return [f for f in _EXPECT_KEYS if getattr(self, f) not in (None, ())]
-
-
-@dataclass(frozen=True)
-class Scenario:
-    path: Path
-    name: str
-    description: str
-    seed: int
-    duration_s: float
-    scale: str
-    camera: CameraSpec
-    rules_path: Path
-    vehicle: VehicleProfile
-    ego: EgoStart
-    road: RoadSpec
-    vehicles: tuple[TrafficVehicle, ...] = ()
-    obstacles: tuple[ObstacleSpec, ...] = ()
-    qr_boards: tuple[QrBoardGroup, ...] = ()
-    lighting: tuple[LightingZone, ...] = ()
-    sensors: SensorSpec | None = None
-    faults: Faults = Faults()
-    expectations: Expectations = Expectations()
-    render_far_m: float = 10.0  # [m] draw distance (from the scale)
-    shadow_radius_m: tuple[float, float] = field(default=(0.08, 0.3))  # [m] tree-shadow blob radii
-
-    @property
-    def dt_s(self) -> float:
-        return 1.0 / self.camera.fps
-
-    @property
-    def cruise_speed_mps(self) -> float:
-        return self.vehicle.cruise_speed_mps
-
-
 _TOP_KEYS = ("name", "description", "seed", "duration_s", "scale", "rules", "camera", "vehicle", "ego", "road", "vehicles",
              "obstacles", "qr_boards", "lighting", "sensors", "faults", "expect")
-_EXPECT_KEYS = ("no_collision", "no_lane_departure", "max_time_outside_lane_s", "min_mean_speed_mps", "max_mean_speed_mps",
-                "min_distance_m", "max_distance_m", "no_emergency", "max_emergency_entries", "max_mode_switches",
-                "stopped_before_obstacle", "min_gap_m", "min_ttc_s", "max_lat_accel_mps2", "mode_by", "strategy_by",
-                "mode_not_before", "max_speed_between")
-_LIMIT_KEYS = ("max_speed_mps", "max_decel_mps2", "reaction_time_s", "stop_margin_m", "max_steering_deg")
+_EXPECT_KEYS = EXPECTATION_NAMES
 _ROAD_KEYS = ("lane_width_m", "marking_width_m", "dash_length_m", "dash_gap_m", "shoulder_m", "lanes_left", "lanes_right",
               "left_marking", "left_colour", "right_marking", "right_colour", "surface", "outer_marking", "outer_colour", "segments")
 _SEGMENT_KEYS = ("kind", "length_m", "radius_m", "turn", "left_marking", "left_colour", "right_marking", "right_colour", "surface")
-
 
 # -- loading -----------------------------------------------------------------------------------
 def load_scenario(path: str | Path) -> Scenario:

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from fearguard.sim.boxes import Box, ray_ranges
-from fearguard.sim.scenario import SensorSpec, UltrasonicFaults
+from fearguard.sim.scenario_values import SensorSpec, UltrasonicFaults
 
 ULTRASONIC_RAYS = 15  # [-] rays across the cone (0.13 m apart at 4 m for a 15° cone: no box slips between)
 

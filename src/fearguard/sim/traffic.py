@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fearguard.sim.scenario import TrafficVehicle
+from fearguard.sim.scenario_values import TrafficVehicle
 
 
 def traffic_speed_mps(vehicle: TrafficVehicle, t_s: float) -> float:

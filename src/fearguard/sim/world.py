@@ -26,7 +26,7 @@ from fearguard.sim.boxes import Box, footprint, overlaps
 from fearguard.sim.lighting import light_at
 from fearguard.sim.render import Renderer
 from fearguard.sim.road import Road
-from fearguard.sim.scenario import Scenario
+from fearguard.sim.scenario_values import Scenario
 from fearguard.sim.traffic import traffic_speed_mps
 
 SUBSYSTEMS = ("scenery", "camera_noise", "ultrasonic", "odometer", "speed")  # SeedSequence children, in this order
