@@ -199,3 +199,37 @@ def load_camera(path: str | Path) -> CameraModel:
 
 def _is_number(value: object) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+# -- presets for the common cars ----------------------------------------------------------------
+# Raspberry Pi Camera Module v2 (Sony IMX219): f = 3.04 mm, 1.12 µm pixels, 3280×2464 full sensor; the 4:3
+# binned modes keep the full field of view (62.2° × 48.8°), so fx = 3.04 / 1.12e-3 × width / 3280.
+_PICAM_V2_FX_PER_WIDTH = 3.04 / 1.12e-3 / 3280  # [px per px of width]
+# The 160° "wide-angle" OV5647 modules sold with Donkey Car kits: a typical calibration at 640×480 gives
+# fx ≈ 330 px (≈ 88° horizontal for the pinhole part) with strong barrel distortion; calibrate yours to be exact.
+_WIDE_FX_PER_WIDTH = 330.0 / 640.0  # [px per px of width]
+_WIDE_DISTORTION = (-0.32, 0.11, 0.0, 0.0, -0.015)  # (k1, k2, p1, p2, k3), typical for those lenses
+DONKEY_CAMERA_HEIGHT_M = 0.18  # [m] lens above the ground on the stock Donkey roll cage; measure yours
+DONKEY_CAMERA_PITCH_DEG = 20.0  # [deg] looking down on the stock mount; measure yours
+
+
+def _preset(width_px: int, height_px: int, fx_per_width: float, distortion: tuple[float, ...] = ()) -> CameraModel:
+    f = fx_per_width * width_px
+    return CameraModel(
+        width_px, height_px, f, f, width_px / 2.0, height_px / 2.0, distortion, DONKEY_CAMERA_HEIGHT_M, DONKEY_CAMERA_PITCH_DEG
+    )
+
+
+CAMERA_PRESETS: dict[str, CameraModel] = {
+    "picam-v2-160x120": _preset(160, 120, _PICAM_V2_FX_PER_WIDTH),  # Donkey's default IMAGE_W × IMAGE_H
+    "picam-v2-320x240": _preset(320, 240, _PICAM_V2_FX_PER_WIDTH),
+    "donkey-wide-160x120": _preset(160, 120, _WIDE_FX_PER_WIDTH, _WIDE_DISTORTION),
+}
+
+
+def camera_preset(name: str) -> CameraModel:
+    """A named camera of a common car (``CAMERA_PRESETS``), to start without a calibration."""
+    try:
+        return CAMERA_PRESETS[name]
+    except KeyError:
+        raise ValueError(f"unknown camera preset {name!r}; expected one of {', '.join(CAMERA_PRESETS)} or a camera.toml") from None

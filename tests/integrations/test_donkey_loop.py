@@ -1,0 +1,225 @@
+"""FearGuardPart inside a real donkeycar ``Vehicle`` loop (donkeycar 5.3.0: Python 3.11, numpy < 2).
+
+Run by ``.ci/donkey.sh`` in its own environment; skipped where donkeycar is not installed. Frames come
+from a real video through a threaded camera part (donkeycar's ``BaseCamera``), the config is donkeycar's
+own ``cfg_complete.py``, the part sits after ``DriveMode`` on ``steering``/``throttle`` (every drive mode
+guarded) and donkeycar's ``TubWriter`` records every output (it raises on a non-finite float).
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+donkeycar = pytest.importorskip("donkeycar", reason="donkeycar 5.3.0 is installed by .ci/donkey.sh (Python 3.11, numpy < 2)")
+
+from donkeycar.config import Config  # noqa: E402
+from donkeycar.parts.camera import BaseCamera  # noqa: E402
+from donkeycar.parts.tub_v2 import TubWriter  # noqa: E402
+from donkeycar.templates.complete import DriveMode  # noqa: E402
+from donkeycar.vehicle import Vehicle  # noqa: E402
+
+from fearguard.integrations.donkey import FearGuardPart  # noqa: E402
+
+VIDEO = "road/video/solidWhiteRight.mp4"
+PILOT_THROTTLE = 0.5  # [-] the easy drive's autopilot throttle
+LOOP_CAP = 400  # [loops] safety cap; the drive ends when the video does (221 frames at 20 fps)
+
+
+def stock_config() -> Config:
+    cfg = Config()
+    cfg.from_pyfile(str(Path(donkeycar.__file__).parent / "templates" / "cfg_complete.py"))
+    return cfg
+
+
+class VideoCamera(BaseCamera):
+    """A threaded camera part playing a video at the camera frame rate: RGB at IMAGE_W × IMAGE_H, like a Pi camera."""
+
+    def __init__(self, path: Path, width: int, height: int, fps: float) -> None:
+        self.path, self.size, self.period_s = path, (width, height), 1.0 / fps
+        self.frame = None
+        self.frames = 0
+        self.finished = threading.Event()
+        self.on = True
+
+    def update(self) -> None:
+        cap = cv2.VideoCapture(str(self.path))
+        next_t = time.monotonic()
+        while self.on:
+            ok, bgr = cap.read()
+            if not ok:
+                break
+            small = cv2.resize(bgr, self.size, interpolation=cv2.INTER_AREA)
+            self.frame = cv2.cvtColor(small, cv2.COLOR_BGR2RGB)
+            self.frames += 1
+            next_t += self.period_s
+            time.sleep(max(0.0, next_t - time.monotonic()))
+        cap.release()
+        self.finished.set()
+
+    def shutdown(self) -> None:
+        self.on = False
+
+
+class Pilot:
+    """An autopilot: a gentle weave and a steady throttle (Donkey units)."""
+
+    def __init__(self, throttle: float) -> None:
+        self.throttle, self.n = throttle, 0
+
+    def run(self, image: object) -> tuple[float | None, float | None]:
+        if image is None:
+            return None, None
+        self.n += 1
+        return 0.1 * math.sin(self.n / 20.0), self.throttle
+
+
+class EndOfVideo:
+    """Stops the vehicle loop when the camera has played the whole video."""
+
+    def __init__(self, vehicle: Vehicle, camera: VideoCamera) -> None:
+        self.vehicle, self.camera = vehicle, camera
+
+    def run(self) -> None:
+        if self.camera.finished.is_set():
+            self.vehicle.on = False
+
+
+class Recorder:
+    """Keeps every loop's channels for the assertions."""
+
+    def __init__(self) -> None:
+        self.rows: list[tuple] = []
+
+    def run(self, *values: object) -> None:
+        self.rows.append(values)
+
+
+class ToyCar:
+    """The car's longitudinal motion from the throttle sent: a first-order lag of 0.3 s, braking at most 2.5 m/s²."""
+
+    LAG_S, DECEL_MPS2 = 0.3, 2.5
+
+    def __init__(self, full_throttle_mps: float) -> None:
+        self.full, self.x_m, self.v_mps, self.last_t = full_throttle_mps, 0.0, 0.0, None
+        self.lock = threading.Lock()
+
+    def run(self, throttle: object) -> tuple[float, float]:
+        now = time.monotonic()
+        dt = 0.0 if self.last_t is None else now - self.last_t
+        self.last_t = now
+        u = float(throttle) if isinstance(throttle, float | int) else 0.0
+        target = max(0.0, u) * self.full
+        v = self.v_mps + (1 - math.exp(-dt / self.LAG_S)) * (target - self.v_mps)
+        with self.lock:
+            self.x_m += 0.5 * (self.v_mps + max(v, self.v_mps - self.DECEL_MPS2 * dt)) * dt
+            self.v_mps = max(v, self.v_mps - self.DECEL_MPS2 * dt, 0.0)
+        return self.x_m, self.v_mps
+
+
+class FakeTFMini:
+    """A threaded TFMini-like part: distance to a box in cm at 100 Hz, 0 before the first echo (as donkeycar's TFMini)."""
+
+    def __init__(self, car: ToyCar, box_x_m: float, first_echo_s: float = 0.2) -> None:
+        self.car, self.box_x_m, self.first_echo_s = car, box_x_m, first_echo_s
+        self.dist, self.on = 0, True
+
+    def update(self) -> None:
+        start = time.monotonic()
+        while self.on:
+            if time.monotonic() - start >= self.first_echo_s:
+                with self.car.lock:
+                    self.dist = round(max(0.0, self.box_x_m - self.car.x_m) * 100)
+            time.sleep(0.01)
+
+    def run_threaded(self) -> int:
+        return self.dist
+
+    def shutdown(self) -> None:
+        self.on = False
+
+
+def drive(data_dir: Path, tmp_path: Path, cfg: Config, tfmini: FakeTFMini | None = None, car: ToyCar | None = None):
+    """The stock wiring: camera → pilot → DriveMode → FearGuardPart on steering/throttle → tub; returns the rows."""
+    vehicle = Vehicle()
+    camera = VideoCamera(data_dir / VIDEO, cfg.IMAGE_W, cfg.IMAGE_H, cfg.CAMERA_FRAMERATE)
+    vehicle.add(camera, outputs=["cam/image_array"], threaded=True)
+    vehicle.add(EndOfVideo(vehicle, camera))
+    if tfmini is not None:
+        vehicle.add(tfmini, outputs=["lidar/dist"], threaded=True)
+    vehicle.add(Pilot(PILOT_THROTTLE), inputs=["cam/image_array"], outputs=["pilot/angle", "pilot/throttle"])
+    vehicle.add(
+        DriveMode(cfg.AI_THROTTLE_MULT),
+        inputs=["user/mode", "user/angle", "user/throttle", "pilot/angle", "pilot/throttle"],
+        outputs=["steering", "throttle"],
+    )
+    part = FearGuardPart.from_cfg(cfg, channels=("steering", "throttle"))
+    vehicle.add(part, inputs=part.inputs, outputs=part.outputs)
+    if car is not None:
+        vehicle.add(car, inputs=["throttle"], outputs=["car/x_m", "car/v_mps"])
+    channels = ["cam/image_array", "pilot/angle", "pilot/throttle", *part.outputs]
+    types = ["image_array", "float", "float", *part.types]
+    tub = TubWriter(str(tmp_path / "tub"), inputs=channels, types=types)
+    vehicle.add(tub, inputs=channels, outputs=["tub/num_records"], run_condition="recording")
+    recorder = Recorder()
+    extra = ["car/x_m", "car/v_mps"] if car is not None else []
+    vehicle.add(recorder, inputs=["pilot/angle", "pilot/throttle", *part.outputs, *extra])
+    vehicle.mem.put(["user/mode", "recording"], ["local", True])
+    result = vehicle.start(rate_hz=cfg.DRIVE_LOOP_HZ, max_loop_count=LOOP_CAP)
+    assert result is not None, "the vehicle loop ended on an exception (see the traceback above)"
+    loops, seconds = result
+    per_call_ms = 1e3 * float(np.mean(vehicle.profiler.records[part]["times"][1:-1]))
+    return recorder.rows, loops, seconds, per_call_ms, len(tub.tub)
+
+
+@pytest.fixture
+def cfg() -> Config:
+    return stock_config()
+
+
+def test_easy_drive_runs_to_the_end_of_the_video_at_loop_rate_with_throttle_passed_through(shared_data, tmp_path, cfg):
+    rows, loops, seconds, per_call_ms, recorded = drive(shared_data, tmp_path, cfg)
+    hz = loops / seconds
+    modes = [r[5] for r in rows]
+    emergency = modes.count("EMERGENCY") / len(rows)
+    pilot_throttle = sum(r[1] for r in rows if r[1] is not None)
+    guarded_throttle = sum(r[3] for r in rows)
+    print(
+        f"\ndonkey loop: {loops} loops in {seconds:.1f} s = {hz:.1f} Hz (target {cfg.DRIVE_LOOP_HZ}); "
+        f"FearGuardPart {per_call_ms:.1f} ms per call; EMERGENCY {100 * emergency:.1f} % of loops; "
+        f"throttle {100 * guarded_throttle / pilot_throttle:.1f} % of the pilot's; modes "
+        f"{ {m: modes.count(m) for m in sorted(set(modes))} }; {recorded} tub records"
+    )
+    assert loops < LOOP_CAP, "the drive ended by the loop cap, not at the end of the video"
+    assert recorded == loops, "TubWriter recorded every loop (no non-finite value ended it)"
+    for row in rows:
+        angle, throttle, fear, mode, limit = row[2:7]
+        assert all(isinstance(v, float) and math.isfinite(v) for v in (angle, throttle, fear, limit)), row
+        assert isinstance(mode, str)
+    assert hz >= 18.0
+    assert emergency <= 0.05
+    assert guarded_throttle >= 0.85 * pilot_throttle
+
+
+def test_tfmini_box_ahead_the_car_stops_before_it(shared_data, tmp_path, cfg):
+    cfg.HAVE_TFMINI = True
+    cfg.FEARGUARD_MAX_SPEED_MPS = 2.0
+    cfg.FEARGUARD_DECEL_MPS2 = 2.0  # configured below the car's real 2.5 m/s² (docs/donkey.md: measure, then round down)
+    car = ToyCar(cfg.FEARGUARD_MAX_SPEED_MPS)
+    box_x_m = 4.0
+    rows, loops, seconds, per_call_ms, _ = drive(shared_data, tmp_path, cfg, FakeTFMini(car, box_x_m), car)
+    x_end, v_end = rows[-1][-2], rows[-1][-1]
+    top = max(r[-1] for r in rows)
+    print(
+        f"\ntfmini box at {box_x_m} m: stopped at {x_end:.2f} m ({box_x_m - x_end:.2f} m before it), "
+        f"top speed {top:.2f} m/s, {loops / seconds:.1f} Hz, {per_call_ms:.1f} ms per call"
+    )
+    assert top > 0.5, "the car drove toward the box"
+    assert x_end < box_x_m - 0.05, "the car stopped before the box"
+    assert v_end < 0.05
