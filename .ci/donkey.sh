@@ -20,5 +20,5 @@ print(f"python {sys.version.split()[0]}, numpy {numpy.__version__}, donkeycar {d
 PY
 # the Donkey loop, then a subset of the project's own tests against the installed wheel
 "$env/bin/python" -m pytest -p no:cacheprovider -o addopts="" -q -s tests/integrations/test_donkey_loop.py
-"$env/bin/python" -m pytest -p no:cacheprovider -o addopts="" -q tests -k "test_api or test_engine or invariants or supervisor or donkey_part"
+"$env/bin/python" -m pytest -p no:cacheprovider -o addopts="" -q tests -k "test_api or test_engine or test_supervisor or donkey_part"
 echo "donkey.sh: $((SECONDS - start)) s"
