@@ -1,4 +1,4 @@
-"""Command line: ``fearguard demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``suite``.
+"""Command line: ``fearguard demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``suite``, ``verify``.
 
 A thin layer: it parses arguments, calls the library, prints, and maps errors to exit codes
 (0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr).
@@ -228,6 +228,16 @@ def cmd_suite(args: argparse.Namespace) -> int:
     return 0 if all(r["passed"] for r in rows if r["controller"] == "guarded") else 1
 
 
+def cmd_verify(args: argparse.Namespace) -> int:
+    """Every safety invariant searched with hypothesis for one car → a table; shrunk counterexamples as JSON Lines."""
+    try:
+        from fearguard.testing.verify import verify_command
+    except ImportError as exc:  # hypothesis is an optional extra
+        raise FearguardError(f"fearguard verify needs hypothesis ({exc}): pip install 'fearguard[testing]'") from None
+    only = tuple(filter(None, (args.only or "").split(",")))
+    return verify_command(args.rules, args.vehicle, args.steer, args.examples, args.seed, args.out, only, args.replay)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fearguard", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -290,6 +300,16 @@ def build_parser() -> argparse.ArgumentParser:
     suite.add_argument("--out", required=True, help="output folder for suite.md and suite.json")
     suite.add_argument("--verbose", action="store_true", help="print each run as it finishes")
     suite.set_defaults(func=cmd_suite)
+    verify = sub.add_parser("verify", help="search every safety invariant with hypothesis for your rules, vehicle and steering")
+    verify.add_argument("--rules", default=None, help="rule file (default: the bundled model-car rules)")
+    verify.add_argument("--vehicle", default=None, help="vehicle preset name or vehicle.toml (default: VehicleLimits())")
+    verify.add_argument("--steer", default=None, help="steering function module:function (default: scripted outputs)")
+    verify.add_argument("--examples", type=int, default=100, help="examples per invariant (default 100)")
+    verify.add_argument("--seed", type=int, default=0, help="search seed: the same seed tries the same examples (default 0)")
+    verify.add_argument("--only", default=None, help="comma-separated invariant keys or numbers, e.g. 2,monotone")
+    verify.add_argument("--out", default="fearguard-counterexamples", help="folder for counterexample files")
+    verify.add_argument("--replay", default=None, help="re-run a counterexample file instead: exit 1 if it still fails")
+    verify.set_defaults(func=cmd_verify)
     return parser
 
 

@@ -70,7 +70,7 @@ class Cues:
     qr_staleness_s: float
 
     def values(self) -> list[float]:
-        """The cues as floats in CUE_NAMES order (non-numbers become NaN)."""
+        """The cues as floats in CUE_NAMES order (non-numbers, also numeric strings, become NaN)."""
         return [_to_float(v) for v in astuple(self)]
 
     def as_array(self) -> np.ndarray:
@@ -95,12 +95,9 @@ def finite_number(value: object) -> float | None:
 
 
 def _to_float(value: object) -> float:
-    if isinstance(value, bool):
-        return math.nan
-    try:
-        return float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError, OverflowError):
-        return math.nan
+    """A cue as float; anything that is not a real number ("0.9", b"1", True, Decimal, an array) is NaN: unknown."""
+    f = real_number(value)
+    return math.nan if f is None else f
 
 
 def worst_filled(values: list[float], brightness_worst: float) -> tuple[list[float], list[bool]]:

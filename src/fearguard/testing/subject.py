@@ -1,0 +1,231 @@
+"""The supervisor under test: a rule base, a vehicle, a steering function; and running a history through it.
+
+``Subject.of(rules=..., vehicle=..., steer=...)`` accepts what a user has at hand: a rule file path (or
+a loaded ``RuleBase``; None = the bundled default), a ``VehicleLimits`` (or a preset name or a
+``vehicle.toml`` path; None = the default car), a steering function frame → degrees (or
+``"module:function"``; None = the history's scripted outputs). Every run starts from a fresh
+``FearGuard`` (and ``steer.reset()`` when the steering function has one), so runs are independent.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+import sys
+import tomllib
+from collections.abc import Callable
+from dataclasses import dataclass, fields
+from pathlib import Path
+from typing import Any
+
+import fearguard as fg
+from fearguard.errors import FearguardError
+from fearguard.testing.frames import frame_pixels
+from fearguard.testing.history import History, SteerRaises, Step
+
+
+class SetupError(FearguardError):
+    """A vehicle file, preset or steering function given to the kit cannot be used."""
+
+
+@dataclass(frozen=True, eq=False)
+class Subject:
+    """What is verified: the rules, the vehicle, and the wrapped steering function (None: scripted)."""
+
+    rules: fg.RuleBase
+    vehicle: fg.VehicleLimits
+    steer: Callable[[Any], Any] | None = None
+    vehicle_name: str = "default"
+    steer_name: str = "scripted"
+
+    @classmethod
+    def of(cls, rules: fg.RuleBase | str | Path | None = None, vehicle: fg.VehicleLimits | str | Path | None = None,
+           steer: Callable[[Any], Any] | str | None = None) -> Subject:
+        rb = rules if isinstance(rules, fg.RuleBase) else fg.load_rules(rules)
+        car, car_name = resolve_vehicle(vehicle)
+        fn, fn_name = resolve_steer(steer)
+        return cls(rb, car, fn, car_name, fn_name)
+
+    def header(self) -> dict[str, Any]:
+        """What a counterexample file records about the subject, to replay it."""
+        return {
+            "rules": self.rules.path, "rules_name": self.rules.name, "vehicle_name": self.vehicle_name,
+            "vehicle": {f.name: _json_number(getattr(self.vehicle, f.name)) for f in fields(self.vehicle)},
+            "steer": self.steer_name,
+        }
+
+
+def _json_number(v: Any) -> Any:
+    return ("inf" if v > 0 else "-inf") if isinstance(v, float) and math.isinf(v) else v
+
+
+def presets() -> dict[str, fg.VehicleLimits]:
+    """The named vehicle presets of ``fearguard.vehicle`` (PRESETS), plus "default" = ``VehicleLimits()``."""
+    from fearguard import vehicle as vehicle_module
+
+    found = getattr(vehicle_module, "PRESETS", {})
+    return {"default": fg.VehicleLimits(), **dict(found)}
+
+
+def distinct_presets() -> dict[str, fg.VehicleLimits]:
+    """The presets with different numbers (aliases of the same car dropped): the cars a matrix test covers."""
+    out: dict[str, fg.VehicleLimits] = {}
+    for name, car in presets().items():
+        if all(car != other for other in out.values()):
+            out[name] = car
+    return out
+
+
+def vehicle_from_mapping(data: dict[str, Any], where: str) -> fg.VehicleLimits:
+    """A VehicleLimits from a table of its fields; unknown keys and bad values name the key."""
+    known = {f.name for f in fields(fg.VehicleLimits)}
+    unknown = sorted(set(data) - known)
+    if unknown:
+        raise SetupError(f"{where}: unknown vehicle key(s) {unknown}; known keys: {', '.join(sorted(known))}")
+    values = {k: (float(v) if v in ("inf", "-inf") else v) for k, v in data.items()}
+    try:
+        return fg.VehicleLimits(**values)
+    except (ValueError, TypeError) as exc:
+        raise SetupError(f"{where}: {exc}") from None
+
+
+def resolve_vehicle(vehicle: fg.VehicleLimits | str | Path | None) -> tuple[fg.VehicleLimits, str]:
+    """A VehicleLimits and its name from a value, a preset name or a vehicle.toml path."""
+    if vehicle is None:
+        return fg.VehicleLimits(), "default"
+    if isinstance(vehicle, fg.VehicleLimits):
+        return vehicle, "given"
+    known = presets()
+    if str(vehicle) in known:
+        return known[str(vehicle)], str(vehicle)
+    path = Path(vehicle)
+    loader = getattr(importlib.import_module("fearguard.vehicle"), "load_vehicle", None)
+    if loader is not None and path.suffix == ".toml":
+        return loader(path), str(path)
+    if not path.is_file():
+        raise SetupError(f"--vehicle {vehicle}: neither a preset ({', '.join(known)}) nor an existing vehicle file")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise SetupError(f"{path}: cannot be read as a vehicle TOML file ({exc})") from None
+    table = data.get("vehicle", data)
+    if not isinstance(table, dict):
+        raise SetupError(f"{path}, key vehicle: must be a table of VehicleLimits fields")
+    return vehicle_from_mapping(table, str(path)), str(path)
+
+
+def resolve_steer(steer: Callable[[Any], Any] | str | None) -> tuple[Callable[[Any], Any] | None, str]:
+    """A steering function from a callable or ``module:function`` (a class is instantiated without arguments)."""
+    if steer is None:
+        return None, "scripted"
+    if callable(steer):
+        return steer, getattr(steer, "__qualname__", type(steer).__name__)
+    module_name, sep, attr = str(steer).partition(":")
+    if not sep or not module_name or not attr:
+        raise SetupError(f"--steer {steer!r}: expected module:function, e.g. my_pilot:steer")
+    if "" not in sys.path and "." not in sys.path:
+        sys.path.insert(0, "")  # the user's own module in the working folder
+    try:
+        module = importlib.import_module(module_name)
+    except Exception as exc:  # the user's module: any import failure is a setup error for them to fix
+        raise SetupError(f"--steer {steer}: cannot import {module_name!r} ({type(exc).__name__}: {exc})") from None
+    obj: Any = module
+    for part in attr.split("."):
+        obj = getattr(obj, part, None)
+        if obj is None:
+            raise SetupError(f"--steer {steer}: {module_name!r} has no {attr!r}")
+    if isinstance(obj, type):
+        obj = obj()
+    if not callable(obj):
+        raise SetupError(f"--steer {steer}: {attr!r} is not callable (a function frame -> degrees)")
+    return obj, str(steer)
+
+
+class _NotCalled:
+    def __repr__(self) -> str:
+        return "not called"
+
+
+NOT_CALLED = _NotCalled()  # the supervisor did not ask the steering function this frame
+
+
+@dataclass(frozen=True)
+class Run:
+    """The commands a history produced, and what the wrapped steering function answered each frame."""
+
+    commands: tuple[fg.Command, ...]
+    steering_in: tuple[Any, ...]  # the wrapped function's raw answer per frame (NOT_CALLED; SteerRaises: it raised)
+    raised: str | None = None  # step() raised: the supervisor broke its contract
+
+
+def observation(step: Step, frame: Any) -> fg.Observation:
+    return fg.Observation(
+        t_s=step.t_s, speed_mps=step.speed_mps, frame=frame, cues=step.cues, ultrasonic_range_m=step.ultrasonic_range_m,
+        odometer_m=step.odometer_m, qr_payload=step.qr_payload, lead=step.lead, ultrasonic_echo_s=step.ultrasonic_echo_s,
+    )
+
+
+class Driver:
+    """One supervisor around the subject's steering function (or a script), fed history after history.
+
+    The steering function is wrapped so that every frame's raw answer is recorded (the checkers compare
+    it with the command); ``reset()`` resets the supervisor and, if it has one, the steering function.
+    """
+
+    def __init__(self, subject: Subject) -> None:
+        self.subject = subject
+        self._step: Step | None = None
+        self._answers: list[Any] = []
+        self.guard = fg.FearGuard(self._steer, rules=subject.rules, vehicle=subject.vehicle)
+        self._reset_steer()
+
+    def _reset_steer(self) -> None:
+        reset = getattr(self.subject.steer, "reset", None)
+        if callable(reset):
+            reset()
+
+    def reset(self) -> None:
+        self.guard.reset()
+        self._reset_steer()
+
+    def _steer(self, frame: Any) -> Any:
+        if self.subject.steer is None:
+            out = self._step.steer_output if self._step is not None else 0.0
+            self._answers[-1] = out
+            if isinstance(out, SteerRaises):
+                raise _exception(out.exception)
+            return out
+        try:
+            out = self.subject.steer(frame)
+        except Exception as exc:  # recorded for the checkers, then handed on: the supervisor must catch it
+            self._answers[-1] = SteerRaises(type(exc).__name__)
+            raise
+        self._answers[-1] = out
+        return out
+
+    def drive(self, history: History) -> Run:
+        """Feed the history frame by frame; a step() that raises ends the run and is reported, never re-raised."""
+        commands: list[fg.Command] = []
+        self._answers = []
+        previous: Any = None
+        for i, step in enumerate(history):
+            self._step = step
+            self._answers.append(NOT_CALLED)
+            frame = frame_pixels(step.frame, previous)
+            previous = frame
+            try:
+                commands.append(self.guard.step(observation(step, frame)))
+            except Exception as exc:  # the contract says step never raises: report it as the violation
+                return Run(tuple(commands), tuple(self._answers), f"step {i} raised {type(exc).__name__}: {exc}")
+        return Run(tuple(commands), tuple(self._answers))
+
+
+def run(subject: Subject, history: History) -> Run:
+    """Feed a history to a fresh supervisor; never raises for what the supervisor does."""
+    return Driver(subject).drive(history)
+
+
+def _exception(name: str) -> Exception:
+    kind = {"RuntimeError": RuntimeError, "ValueError": ValueError, "ZeroDivisionError": ZeroDivisionError,
+            "TypeError": TypeError, "MemoryError": MemoryError}.get(name, RuntimeError)
+    return kind("scripted steering fault")

@@ -1,0 +1,165 @@
+"""fearguard.testing itself: broken cars are caught (exit 1 with a replayable counterexample, or exit 2),
+histories survive their file, and the three-line user test runs in a folder of its own."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import fearguard as fg
+from fearguard.cli import main
+from fearguard.cues import CUE_NAMES
+from fearguard.testing import Case, FrameSpec, Step, Subject, histories, load_case, save_case, unknown_values
+from fearguard.testing.frames import frame_pixels
+from fearguard.testing.history import step_record
+from fearguard.testing.subject import run
+
+SRC = Path(fg.__file__).resolve().parents[1]
+RULES = Path(__file__).resolve().parents[2] / "rules"
+
+
+def broken_rules(tmp_path: Path, name: str, old: str, new: str) -> Path:
+    text = (RULES / "default.toml").read_text()
+    assert old in text
+    path = tmp_path / name
+    path.write_text(text.replace(old, new))
+    return path
+
+
+def verify(tmp_path: Path, capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str]:
+    code = main(["verify", "--out", str(tmp_path / "cx"), "--seed", "1", *args])
+    out = capsys.readouterr()
+    return code, out.out + out.err
+
+
+INVERTED = ('"IF obstacle_range_m IS far THEN fear IS very_low"', '"IF obstacle_range_m IS far THEN fear IS very_high"')
+LOW_FEAR = ("""universe = [0.0, 1.0, 0.005]
+very_low = { trimf = [0.0, 0.0, 0.25] }
+low = { trimf = [0.0, 0.25, 0.5] }
+medium = { trimf = [0.25, 0.5, 0.75] }
+high = { trimf = [0.5, 0.75, 1.0] }
+very_high = { trimf = [0.75, 1.0, 1.0] }""", """universe = [0.0, 0.6, 0.005]
+very_low = { trimf = [0.0, 0.0, 0.15] }
+low = { trimf = [0.0, 0.15, 0.3] }
+medium = { trimf = [0.15, 0.3, 0.45] }
+high = { trimf = [0.3, 0.45, 0.6] }
+very_high = { trimf = [0.45, 0.6, 0.6] }""")
+HOLD_0 = ("hold_s = 2.0 ", "hold_s = 0.0 ")
+
+
+@pytest.mark.parametrize(("name", "edit", "only", "expected"), [
+    ("inverted.toml", INVERTED, "3", "monotone in each cue"),
+    ("low_fear.toml", LOW_FEAR, "4", "no EMERGENCY within enter_frames"),
+    ("hold0.toml", HOLD_0, "5", "a latch of 0 s lets the mode chatter"),
+])
+def test_a_broken_rule_file_fails_with_a_counterexample_that_replays(tmp_path, capsys, name, edit, only, expected) -> None:
+    path = broken_rules(tmp_path, name, *edit)
+    code, out = verify(tmp_path, capsys, "--rules", str(path), "--only", only, "--examples", "60")
+    assert code == 1 and "FAILED" in out and expected in out, out
+    saved = next((tmp_path / "cx").glob("*.jsonl"))
+    header = json.loads(saved.read_text().splitlines()[0])
+    assert header["fearguard"] == "counterexample" and header["rules"] == str(path) and header["number"] == only
+    assert main(["verify", "--replay", str(saved)]) == 1  # the shrunk history still breaks it
+    assert expected in capsys.readouterr().out
+    assert main(["verify", "--replay", str(saved), "--rules", str(RULES / "default.toml")]) == 0  # and the bundled rules pass it
+    assert "holds now" in capsys.readouterr().out
+
+
+def test_a_car_that_cannot_stop_within_its_sensor_range_fails_safe_distance(tmp_path, capsys) -> None:
+    car = tmp_path / "fast_car.toml"
+    car.write_text("[vehicle]\nmax_speed_mps = 30.0\nmax_decel_mps2 = 6.0\nreaction_time_s = 0.5\nstop_margin_m = 1.0\n"
+                   "ultrasonic_min_range_m = 0.3\nultrasonic_max_range_m = 80.0\n")
+    code, out = verify(tmp_path, capsys, "--rules", str(RULES / "road_car.toml"), "--vehicle", str(car), "--only", "2", "--examples", "60")
+    assert code == 1 and "nothing in range: an obstacle may stand just beyond the sensor's maximum range" in out, out
+    saved = tmp_path / "cx" / "safe_distance.jsonl"
+    header, case = load_case(saved)
+    assert header["vehicle"]["max_speed_mps"] == 30.0 and len(case.run("drive")) > 1
+    assert main(["verify", "--replay", str(saved)]) == 1
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (["--vehicle", "no_brakes.toml"], "VehicleLimits.max_decel_mps2 must be > 0"),
+    (["--vehicle", "no_such_car"], "neither a preset"),
+    (["--vehicle", "typo.toml"], "unknown vehicle key(s) ['max_sped_mps']"),
+    (["--rules", "nothing_here.toml"], "no such file"),
+    (["--steer", "no_such_module_xyz:steer"], "cannot import 'no_such_module_xyz'"),
+    (["--steer", "math"], "expected module:function"),
+])
+def test_a_bad_file_is_rejected_with_exit_2(tmp_path, capsys, monkeypatch, args, says) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "no_brakes.toml").write_text("[vehicle]\nmax_decel_mps2 = 0.0\n")
+    (tmp_path / "typo.toml").write_text("[vehicle]\nmax_sped_mps = 2.0\n")
+    code, out = verify(tmp_path, capsys, *args)
+    assert code == 2 and says in out, out
+
+
+def test_the_bundled_default_passes_every_invariant(tmp_path, capsys) -> None:
+    code, out = verify(tmp_path, capsys, "--examples", "5")
+    assert code == 0, out
+    assert "liveness of the recovery" in out and " 1  limits in range" in out and "failed" in out.splitlines()[-1]
+
+
+def _same(a: tuple[Step, ...], b: tuple[Step, ...]) -> bool:
+    return [step_record("r", i, s) for i, s in enumerate(a)] == [step_record("r", i, s) for i, s in enumerate(b)]
+
+
+@given(st.one_of(histories(max_size=6), histories(level="frame", max_size=4)))
+def test_a_history_survives_its_file(tmp_path_factory, history) -> None:
+    path = tmp_path_factory.mktemp("h") / "h.jsonl"
+    save_case(path, Case.drive(history, note="x", cue="lane_confidence"), {"invariant": "limits_in_range"})
+    header, case = load_case(path)
+    assert _same(case.run("drive"), history) and case.params == {"cue": "lane_confidence"} and header["invariant"] == "limits_in_range"
+
+
+@given(st.sampled_from(CUE_NAMES).flatmap(lambda n: st.tuples(st.just(n), unknown_values(n))))
+def test_unknown_values_are_unknown_to_the_supervisor(item) -> None:
+    name, value = item
+    cues = fg.Cues(**{**{n: 0.5 for n in CUE_NAMES}, name: value})
+    v = cues.values()[CUE_NAMES.index(name)]
+    assert math.isnan(v) or v < 0 or (name in ("lane_confidence", "occlusion") and v > 1) or (name == "brightness" and v > 255)
+
+
+def test_frames_rebuild_byte_for_byte_and_refill_one_buffer() -> None:
+    spec = FrameSpec("render", "night", 2, "noise")
+    steps = (Step(t_s=0.0, frame=spec), Step(t_s=0.1, frame=FrameSpec("render", "clear_straight", 1, reuse_buffer=True)))
+    seen: list = []
+    run(Subject.of(None, None, lambda frame: seen.append(frame) or 0.0), steps)
+    assert seen[0] is seen[1] and (seen[1] == frame_pixels(FrameSpec("render", "clear_straight", 1))).all()  # refilled
+    assert (frame_pixels(spec) == frame_pixels(spec)).all() and frame_pixels(spec).shape == (240, 320, 3)
+
+
+def _env() -> dict[str, str]:
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")])}
+
+
+def test_import_fearguard_does_not_need_hypothesis() -> None:
+    code = "import sys; sys.modules['hypothesis'] = None; import fearguard, fearguard.cli; sys.exit(fearguard.cli.main(['verify']))"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), timeout=120)
+    assert done.returncode == 2 and "pip install 'fearguard[testing]'" in done.stderr, done.stderr
+
+
+def test_the_three_line_user_test_runs_in_a_fresh_folder(tmp_path) -> None:
+    (tmp_path / "rules").mkdir()
+    (tmp_path / "rules" / "my_car.toml").write_text((RULES / "default.toml").read_text())
+    (tmp_path / "my_pilot.py").write_text("def my_pilot(frame):\n    return 3.0\n")
+    (tmp_path / "test_my_car.py").write_text(textwrap.dedent("""\
+        import fearguard as fg
+        from my_pilot import my_pilot
+        MY_CAR = fg.VehicleLimits(max_speed_mps=1.5)
+
+        from fearguard.testing import supervisor_invariants
+        test_my_car = supervisor_invariants(rules="rules/my_car.toml", vehicle=MY_CAR, steer=my_pilot, examples=5)
+        """))
+    done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rs", "test_my_car.py"], cwd=tmp_path,
+                          capture_output=True, text=True, env=_env(), timeout=600)
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert "9 passed, 1 skipped" in done.stdout, done.stdout
