@@ -183,7 +183,7 @@ def _safe_distance_cases(subject: Subject) -> st.SearchStrategy[Case]:
         dt = draw(st.sampled_from(STEADY_DT_S))
         n, v0 = math.ceil(ramp_s / dt), draw(speeds)  # the search trims it to the first frame that is too fast
         return Case.drive((Step(t_s=k * dt, speed_mps=v0, cues=cues) for k in range(n)),
-                          note=f"a steady calm picture, obstacle at {d:.4g} m, for {n * dt:.4g} s")
+                          note=f"a steady calm picture, obstacle at {d:.4g} m, every {dt:g} s")
 
     return st.one_of(drives, steady())
 

@@ -38,36 +38,41 @@ class Counterexample:
     def commands(self) -> dict[str, list[fg.Command]]:
         return {name: list(run(self.subject, history).commands) for name, history in self.case.runs}
 
-    def text(self, max_frames: int = 40) -> str:
-        """A readable report: the broken invariant, why, and the history frame by frame with the commands."""
+    def text(self, max_frames: int = 12) -> str:
+        """A readable report: the broken invariant, why, and the history frame by frame with the commands
+        (a long one: its first and last ``max_frames // 2`` frames, where it starts and where it breaks)."""
         out = [f"invariant {self.invariant.number} ({self.invariant.title}) fails: {self.message}"]
         if self.case.note:
             out.append(f"case: {self.case.note}")
         cmds = self.commands()
         for name, history in self.case.runs:
             out.append(f"run {name!r}, {len(history)} frame(s):")
-            for i, step in enumerate(history[:max_frames]):
-                c = cmds[name][i] if i < len(cmds[name]) else None
-                obs = f"t={step.t_s!r} v={step.speed_mps!r}"
-                if step.cues is not None:
-                    obs += " cues=(" + ", ".join(repr(getattr(step.cues, n)) for n in fg.CUE_NAMES) + ")"
-                if step.frame is not None:
-                    obs += f" frame={step.frame.to_json()}"
-                for fname in ("ultrasonic_range_m", "odometer_m", "qr_payload", "lead"):
-                    if getattr(step, fname) is not None:
-                        obs += f" {fname}={getattr(step, fname)!r}"
-                obs += f" steer→{step.steer_output!r}"
-                res = (f"{c.mode.name} {c.strategy.name} limit {c.speed_limit_mps:.4g} steer {c.steering_deg:+.4g} "
-                       f"fear {c.fear:.3g}") if c else "-"
-                out.append(f"  {i:>3} {obs}\n      ⇒ {res}")
-            if len(history) > max_frames:
-                out.append(f"  ... {len(history) - max_frames} more frame(s) in the file")
+            half = max(1, max_frames // 2)
+            shown = range(len(history)) if len(history) <= max_frames else [*range(half), *range(len(history) - half, len(history))]
+            for i in shown:
+                if len(history) > max_frames and i == len(history) - half:
+                    out.append(f"  ... {len(history) - 2 * half} frame(s) like these (all in the file) ...")
+                out.append(_frame_text(i, history[i], cmds[name][i] if i < len(cmds[name]) else None))
         return "\n".join(out)
 
     def save(self, path: str | Path) -> Path:
         """Write the case as a replayable JSON Lines history (``fearguard verify --replay FILE``)."""
         header = {"invariant": self.invariant.key, "number": self.invariant.number, "message": self.message, **self.subject.header()}
         return save_case(path, self.case, header, self.commands())
+
+
+def _frame_text(i: int, step: Any, c: fg.Command | None) -> str:
+    obs = f"t={step.t_s!r} v={step.speed_mps!r}"
+    if step.cues is not None:
+        obs += " cues=(" + ", ".join(repr(getattr(step.cues, n)) for n in fg.CUE_NAMES) + ")"
+    if step.frame is not None:
+        obs += f" frame={step.frame.to_json()}"
+    for fname in ("ultrasonic_range_m", "odometer_m", "qr_payload", "lead"):
+        if getattr(step, fname) is not None:
+            obs += f" {fname}={getattr(step, fname)!r}"
+    obs += f" steer→{step.steer_output!r}"
+    res = f"{c.mode.name} {c.strategy.name} limit {c.speed_limit_mps:.4g} steer {c.steering_deg:+.4g} fear {c.fear:.3g}" if c else "-"
+    return f"  {i:>3} {obs}\n      ⇒ {res}"
 
 
 @dataclass(frozen=True)
