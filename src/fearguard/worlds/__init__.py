@@ -1,0 +1,1 @@
+"""Third-party worlds fearguard drives in closed loop (each imports its simulator lazily)."""

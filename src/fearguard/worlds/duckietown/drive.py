@@ -1,0 +1,265 @@
+"""One closed-loop drive in gym-duckietown: the robot's camera → fearguard → the robot, measured by the simulator.
+
+Controllers:
+- ``guarded``: ``FearGuard(HoughLaneSteering(camera))`` with the Duckiebot preset; the robot drives
+  min(cruise, speed limit) along the pure-pursuit arc to the commanded steering bearing.
+- ``unguarded``: the same lane steering alone at cruise (a fault keeps the last angle).
+- ``expert``: the simulator's ground-truth pure pursuit (lane centre 0.25 m ahead) at cruise, the upper bound.
+Every step: frame (with sensor noise) and, with ``range_sensor="tof"``, a time-of-flight reading from
+the ground truth → the controller → the DuckietownEnv action → the simulator's truth. An obstacle
+(duck, cone, Duckiebot) can stand on the lane centre ``ahead_m`` ahead of the start; it is taken away
+once the robot has stood still ``remove_after_s``. The drive ends at its duration or at the
+simulator's "invalid pose" (a wheel off the drivable tiles, or contact). Outputs: log.jsonl (one
+flushed line per step), summary.json, timeline.png, drive.png, and annotated.mp4 if asked.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fearguard.fuzzy.loader import bundled_rules_path, load_rules
+from fearguard.overlay import VideoOut, annotate
+from fearguard.report import JsonlLog, command_record, json_value, plot_timeline, read_jsonl, summarize
+from fearguard.sim.loop import _unsupervised_steering
+from fearguard.supervisor import Command, FearGuard, Observation
+from fearguard.vision.lane_steering import HoughLaneSteering
+from fearguard.worlds.duckietown.metrics import STOPPED_SPEED_MPS, Sample, summarize_drive
+from fearguard.worlds.duckietown.preset import (
+    FRAME_RATE_HZ,
+    aim_distance_m,
+    curvature_action,
+    duckiebot_camera,
+    duckiebot_limits,
+    steering_action,
+)
+from fearguard.worlds.duckietown.world import DuckietownWorld, Truth
+
+CONTROLLERS = ("guarded", "unguarded", "expert")
+OBSTACLES = ("duck", "cone", "duckiebot")
+RANGE_SENSORS = ("none", "tof")
+EXPERT_LOOKAHEAD_M = 0.25  # [m] the simulator's own pure-pursuit teacher follows the lane centre this far ahead
+RULES_FILE = "duckiebot.toml"
+
+
+@dataclass(frozen=True)
+class DriveOptions:
+    """One drive; every field has the default a plain ``fearguard duckietown MAP --out DIR`` uses."""
+
+    map_name: str = "loop_empty"
+    seconds: float = 60.0
+    controller: str = "guarded"
+    cruise_mps: float = 0.2
+    obstacle: str | None = None
+    ahead_m: float = 1.0
+    remove_after_s: float = 3.0  # [s] standing still this long in front of the obstacle: it is taken away
+    range_sensor: str = "none"
+    domain_rand: bool = False
+    seed: int = 0
+    width_px: int = 320
+    height_px: int = 240
+    rules: str | None = None  # default: the bundled Duckiebot rules
+    start_tile: tuple[int, int] | None = None
+    video: bool = False
+    plots: bool = True
+
+    def __post_init__(self) -> None:
+        if self.controller not in CONTROLLERS:
+            raise ValueError(f"controller {self.controller!r}: choose one of {', '.join(CONTROLLERS)}")
+        if self.obstacle is not None and self.obstacle not in OBSTACLES:
+            raise ValueError(f"obstacle {self.obstacle!r}: choose one of {', '.join(OBSTACLES)}")
+        if self.range_sensor not in RANGE_SENSORS:
+            raise ValueError(f"range sensor {self.range_sensor!r}: choose one of {', '.join(RANGE_SENSORS)}")
+        for name in ("seconds", "cruise_mps", "ahead_m"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive number, got {value!r}")
+
+
+@dataclass(frozen=True)
+class DriveResult:
+    summary: dict[str, Any]
+    out_dir: Path | None
+    interrupted: bool
+
+
+class _Recorder:
+    """log.jsonl (flushed per step), annotated.mp4; at the end summary.json and the plots."""
+
+    def __init__(self, out: Path | None, video: bool) -> None:
+        self.out = out
+        self.log = JsonlLog(out / "log.jsonl") if out is not None else None
+        self.video = VideoOut(str(out / "annotated.mp4"), FRAME_RATE_HZ) if out is not None and video else None
+
+    def write(self, record: dict[str, Any], frame: np.ndarray | None, cmd: Command | None, analysis: Any, label: str) -> None:
+        if self.log is not None:
+            self.log.write(record)
+        if self.video is not None and frame is not None:
+            self.video.write(annotate(frame, cmd, analysis, label))
+
+    def close(self) -> None:
+        if self.log is not None:
+            self.log.close()
+        if self.video is not None:
+            self.video.close()
+
+    def finish(self, summary: dict[str, Any], title: str, plots: bool) -> dict[str, Any]:
+        if self.out is None:
+            return summary
+        records = read_jsonl(self.out / "log.jsonl")
+        summary = {**summary, "supervisor": summarize(records) if records and "fear" in records[0] else None}
+        summary = json_value(summary)
+        (self.out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+        if plots and records:
+            if "fear" in records[0]:
+                plot_timeline(records, self.out / "timeline.png", title=title, extra_speed="speed_mps")
+            plot_drive(records, self.out / "drive.png", title)
+        return summary
+
+
+def drive(options: DriveOptions, out_dir: str | Path | None = None,
+          on_step: Callable[[int, int], None] | None = None) -> DriveResult:
+    """Run one drive; with ``out_dir`` write its files there. A Ctrl-C stops cleanly with everything so far."""
+    o = options
+    out = Path(out_dir) if out_dir is not None else None
+    if out is not None:
+        out.mkdir(parents=True, exist_ok=True)
+    world = DuckietownWorld(o.map_name, width_px=o.width_px, height_px=o.height_px, seed=o.seed, domain_rand=o.domain_rand,
+                            start_tile=o.start_tile)
+    camera = duckiebot_camera(o.width_px, o.height_px)
+    aim_m = aim_distance_m(camera)
+    limits = duckiebot_limits(time_of_flight=o.range_sensor == "tof")
+    lanes = HoughLaneSteering(camera=camera, fps=FRAME_RATE_HZ)
+    rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
+    guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=camera) if o.controller == "guarded" else None
+    obstacle_xz = world.add_obstacle(o.obstacle, o.ahead_m) if o.obstacle is not None else None
+    recorder = _Recorder(out, o.video)
+    total = math.ceil(o.seconds * FRAME_RATE_HZ)
+    samples: list[Sample] = []
+    guard_ms: list[float] = []
+    sim_ms: list[float] = []
+    truth: Truth = world.truth()
+    last_steer, standing_since, interrupted = 0.0, None, False
+    try:
+        for k in range(total):
+            frame = world.frame_bgr() if o.controller != "expert" else None
+            tof = world.tof_range_m() if o.range_sensor == "tof" else None
+            cmd: Command | None = None
+            began = time.perf_counter()
+            if guard is not None:
+                cmd = guard.step(Observation(t_s=truth.t_s, speed_mps=truth.speed_mps, frame=frame, ultrasonic_range_m=tof))
+                steering, speed = cmd.steering_deg, min(o.cruise_mps, cmd.speed_limit_mps)
+                action = steering_action(steering, speed, aim_m)
+            elif o.controller == "unguarded":
+                steering = _unsupervised_steering(lanes, frame, last_steer, limits.max_steering_deg)
+                speed = o.cruise_mps
+                action = steering_action(steering, speed, aim_m)
+            else:
+                steering, speed = math.nan, o.cruise_mps
+                action = curvature_action(speed, world.expert_curvature(EXPERT_LOOKAHEAD_M))
+            mid = time.perf_counter()
+            last_steer = steering
+            present = world.has_obstacle
+            truth = world.step(action)
+            sim_ms.append(1e3 * (time.perf_counter() - mid))
+            if o.controller != "expert":
+                guard_ms.append(1e3 * (mid - began))
+            samples.append(Sample(truth.t_s, truth.speed_mps, truth.lane_offset_m, truth.progress_m, truth.invalid_pose, truth.collided,
+                                  truth.obstacle_gap_m, present, cmd.mode.name if cmd else None, cmd.strategy.name if cmd else None,
+                                  cmd.fear if cmd else None))
+            record = command_record(
+                k, samples[-1].t_s, cmd, controller=o.controller, speed_target_mps=speed, applied_steering_deg=steering,
+                vel=action.vel, omega=action.omega, yaw_rate_rps=action.yaw_rate_rps, speed_mps=truth.speed_mps,
+                progress_m=truth.progress_m, lane_offset_m=truth.lane_offset_m, heading_error_deg=truth.heading_error_deg,
+                x_m=truth.x_m, y_m=truth.y_m, yaw_rad=truth.yaw_rad, invalid_pose=truth.invalid_pose, collided=truth.collided,
+                obstacle_gap_m=truth.obstacle_gap_m, obstacle_present=present, tof_m=tof,
+            )
+            analysis = guard.last_perception.analysis if guard is not None and guard.last_perception is not None else None
+            recorder.write(record, frame, cmd, analysis, f"v {truth.speed_mps:.2f} m/s")
+            if on_step is not None:
+                on_step(k + 1, total)
+            if truth.invalid_pose:
+                break
+            if world.has_obstacle:
+                standing_since = (standing_since if standing_since is not None else truth.t_s) if truth.speed_mps <= STOPPED_SPEED_MPS \
+                    and truth.t_s > 0.5 else None
+                if standing_since is not None and truth.t_s - standing_since >= o.remove_after_s:
+                    world.remove_obstacle()
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        recorder.close()
+        world.close()
+    summary = summarize_drive(samples, world.dt_s)
+    summary.update(
+        map=o.map_name, controller=o.controller, seed=o.seed, options={**asdict(o), "start_tile": o.start_tile},
+        obstacle_xz_m=obstacle_xz, interrupted=interrupted, aim_distance_m=aim_m,
+        timing=_timing(guard_ms, sim_ms),
+        camera=asdict(camera), vehicle=asdict(limits), rules=rules.name,
+    )
+    title = f"fearguard in Duckietown: {o.map_name}, {o.controller}" + (f", {o.obstacle} {o.ahead_m:g} m ahead" if o.obstacle else "")
+    summary = recorder.finish(summary, title, o.plots) if out is not None else json_value(summary)
+    return DriveResult(summary, out, interrupted)
+
+
+def _timing(guard_ms: list[float], sim_ms: list[float]) -> dict[str, Any]:
+    """Per-step cost (ms) of the controller and of the simulator step (physics + rendering), and the share."""
+    sim = float(np.median(sim_ms)) if sim_ms else math.nan
+    out: dict[str, Any] = {"simulator_ms_median": sim, "simulator_ms_mean": float(np.mean(sim_ms)) if sim_ms else math.nan}
+    if guard_ms:
+        g = float(np.median(guard_ms))
+        out.update(controller_ms_median=g, controller_ms_mean=float(np.mean(guard_ms)), controller_ms_p95=float(np.percentile(guard_ms, 95)),
+                   controller_share_of_simulator_step=g / sim if sim > 0 else None)
+    return out
+
+
+def plot_drive(records: list[dict[str, Any]], path: Path, title: str) -> Path:
+    """The path on the map coloured by mode, and the lane offset with the tape edges."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from fearguard.worlds.duckietown.preset import WHEEL_OUTER_HALF_TRACK_M as W
+    from fearguard.worlds.duckietown.preset import WHITE_INNER_M, WHITE_OUTER_M, YELLOW_INNER_M, YELLOW_OUTER_M
+
+    colours = {"NORMAL": "tab:green", "CAUTION": "tab:orange", "EMERGENCY": "tab:red", None: "tab:blue"}
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(13, 5.5), gridspec_kw={"width_ratios": [1, 1.6]})
+    x = [r["x_m"] for r in records]
+    y = [r["y_m"] for r in records]
+    c = [colours.get(r.get("mode"), "tab:blue") for r in records]
+    ax0.scatter(x, y, c=c, s=4)
+    ax0.plot(x[:1], y[:1], "k^", label="start")
+    ax0.set_aspect("equal")
+    ax0.set_xlabel("x [m]")
+    ax0.set_ylabel("y [m]")
+    ax0.set_title("path (green NORMAL, orange CAUTION, red EMERGENCY, blue unsupervised)")
+    t = [r["t_s"] for r in records]
+    d = [math.nan if r.get("lane_offset_m") is None else r["lane_offset_m"] for r in records]
+    ax1.plot(t, d, color="black", label="lane offset (+ right)")
+    for value, colour, label in ((WHITE_OUTER_M - W, "red", "wheel off the road"), (WHITE_INNER_M - W, "grey", "wheel on the white tape"),
+                                 (YELLOW_INNER_M + W, "goldenrod", "wheel on the yellow line"), (YELLOW_OUTER_M + W, "darkred", "wheel in the other lane")):
+        ax1.axhline(value, color=colour, linestyle="--", linewidth=1, label=label)
+    ax1.set_xlabel("t [s]")
+    ax1.set_ylabel("lane offset [m]")
+    ax1.legend(loc="upper right", fontsize=8)
+    ax2 = ax1.twinx()
+    ax2.plot(t, [r["speed_mps"] for r in records], color="tab:blue", alpha=0.5)
+    ax2.set_ylabel("speed [m/s]", color="tab:blue")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
+def with_controller(options: DriveOptions, controller: str) -> DriveOptions:
+    """The same drive with another controller (the baselines of a suite row)."""
+    return replace(options, controller=controller)

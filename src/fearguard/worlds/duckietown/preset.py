@@ -1,0 +1,120 @@
+"""The Duckiebot preset: its camera, its limits, its lane geometry and how a fearguard command drives it.
+
+Pure values and functions (no simulator import), so they are testable and usable on a real robot.
+
+Camera (gym-duckietown's DB18): vertical FOV 75°, square pixels, principal point centred, pitched
+19.15° down, 0.108 m above the floor, 0.066 m ahead of the wheel axle, 30 frames/s.
+
+Actuation (the steering angle is the bearing of an aim point, as fearguard's lane steering gives it):
+the aim point sits at the bearing α on the ground ``aim_m`` ahead of the camera, i.e. at
+(x, y) = (CAMERA_AHEAD_M + aim_m, aim_m · tan α) from the axle; pure pursuit drives the arc through
+it, κ = 2·y / (x² + y²), and the yaw rate is ω = v·κ at the commanded speed v (so a stopped robot
+does not spin). The simulator's DuckietownEnv takes [vel, omega]; the nominal DB18 PWM dynamics of
+duckietown-world (u̇ = −5u + 1.5(V_r + V_l), ω̇ = −4ω + 15(V_r − V_l), with DuckietownEnv's
+wheel radius 0.0318 m, motor constant 27, baseline 0.102 m) settle at u = 0.699·vel and
+ω = 0.4455·omega, so the action is [v / SPEED_GAIN, ω / YAW_RATE_GAIN].
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from fearguard.camera import CameraModel
+from fearguard.vehicle import VehicleLimits
+
+# -- camera (gym_duckietown.simulator constants) -----------------------------------------------
+CAMERA_VFOV_DEG = 75.0  # [deg] vertical field of view
+CAMERA_PITCH_DEG = 19.15  # [deg] down
+CAMERA_HEIGHT_M = 0.108  # [m] above the floor
+CAMERA_AHEAD_M = 0.066  # [m] ahead of the wheel axle (the centre of rotation)
+FRAME_RATE_HZ = 30.0  # [1/s] the simulator's step
+DEFAULT_FRAME_PX = (320, 240)  # [px] 4:3 as the real camera; 640×480 costs 2.5× the rendering time
+
+# -- actuation (steady state of the nominal DB18 dynamics through DuckietownEnv, see above) ----
+_DUTY_PER_MPS = 1.0 / (0.0318 * 27.0)  # [1/(m/s)] DuckietownEnv: duty = wheel speed · radius⁻¹ / k
+SPEED_GAIN = 2 * 0.3 * _DUTY_PER_MPS  # [-] steady speed per unit of ``vel`` (u = 1.5/5 · (V_r + V_l)) ≈ 0.699
+YAW_RATE_GAIN = 15.0 / 4.0 * 0.102 * _DUTY_PER_MPS  # [-] steady yaw rate per unit of ``omega`` ≈ 0.4455
+MAX_SPEED_MPS = 0.6  # [m/s] both wheels at full duty: u = 1.5/5 · 2
+ACTUATION_DELAY_S = 0.15  # [s] the simulator's command delay (get_DB18_nominal(delay=0.15))
+SPEED_TIME_CONSTANT_S = 0.2  # [s] 1/u1 of the PWM dynamics: the speed settles exponentially
+
+# -- body and lane (Duckietown appearance specification; tile 0.585 m) -------------------------
+WHEEL_OUTER_HALF_TRACK_M = 0.065  # [m] centre line of the robot to the outer face of a wheel (13 cm wide)
+ROBOT_FRONT_M = CAMERA_AHEAD_M  # [m] axle to the front bumper (the simulator's box ends at the camera)
+# offsets from the simulator's lane centre, + = right (get_lane_pos2().dist's sign as it really is)
+WHITE_INNER_M = 0.128  # [m] inner edge of the white (outer) tape
+WHITE_OUTER_M = 0.1755  # [m] outer edge of the white tape: the edge of the road
+YELLOW_INNER_M = -0.108  # [m] near edge of the yellow centre line
+YELLOW_OUTER_M = -0.126  # [m] far edge of the yellow line: beyond it is the oncoming lane
+
+
+def duckiebot_camera(width_px: int = DEFAULT_FRAME_PX[0], height_px: int = DEFAULT_FRAME_PX[1]) -> CameraModel:
+    """The simulated Duckiebot camera at a resolution: square pixels, so fx = fy from the vertical FOV."""
+    f = (height_px / 2.0) / math.tan(math.radians(CAMERA_VFOV_DEG) / 2.0)
+    return CameraModel(width_px, height_px, f, f, width_px / 2.0, height_px / 2.0, (), CAMERA_HEIGHT_M, CAMERA_PITCH_DEG)
+
+
+def aim_distance_m(camera: CameraModel) -> float:
+    """Ground distance ahead of the camera of the row fearguard's lane steering aims at (its look-ahead row)."""
+    from fearguard.vision.lanes import road_region, work_size
+    from fearguard.vision.steering import lookahead_row
+
+    w, h = work_size(camera.width_px, camera.height_px)
+    row = lookahead_row(road_region(w, h, camera)) * camera.height_px / h
+    distance = camera.ground_range_m(row)
+    if distance is None:
+        raise ValueError(f"the look-ahead row {row:.0f} px is at or above the horizon of this camera")
+    return distance
+
+
+def duckiebot_limits(*, time_of_flight: bool = False) -> VehicleLimits:
+    """A 1:20 Duckiebot: 0.5 m/s top speed, no range sensor (or a front time-of-flight sensor, 0.05–1.2 m).
+
+    Braking: the speed decays with τ = 0.2 s after a 0.15 s delay (distance v·(0.15 + 0.2)); planning
+    with 0.5 m/s² after 0.25 s covers that for every speed up to the top speed. The steering limit is
+    the camera's half field of view: a bearing outside it cannot come from the picture.
+    """
+    half_hfov = math.degrees(math.atan((DEFAULT_FRAME_PX[0] / 2.0) / duckiebot_camera().fx_px))
+    return VehicleLimits(
+        max_speed_mps=0.5, max_decel_mps2=0.5, reaction_time_s=0.25, stop_margin_m=0.05,
+        max_steering_deg=round(half_hfov, 1), has_ultrasonic=time_of_flight, has_qr_localisation=False,
+        ultrasonic_min_range_m=TOF_MIN_RANGE_M, ultrasonic_max_range_m=TOF_MAX_RANGE_M,
+    )
+
+
+TOF_MIN_RANGE_M = 0.05  # [m] VL53L0X-class time-of-flight sensor (newer Duckiebots): closer reads as this
+TOF_MAX_RANGE_M = 1.2  # [m] its indoor range; beyond it nothing is in range
+TOF_CONE_DEG = 25.0  # [deg] full opening angle
+
+
+@dataclass(frozen=True)
+class Action:
+    """What DuckietownEnv.step takes, with the targets it came from."""
+
+    vel: float  # [-] DuckietownEnv's velocity command
+    omega: float  # [-] DuckietownEnv's angular command
+    speed_mps: float  # [m/s] the speed asked for
+    yaw_rate_rps: float  # [rad/s] the yaw rate asked for (+ = left)
+
+    def as_list(self) -> list[float]:
+        return [self.vel, self.omega]
+
+
+def pursuit_curvature_per_m(bearing_deg: float, aim_m: float) -> float:
+    """Curvature (1/m, + = left) of the arc from the axle through the aim point at ``bearing_deg`` seen ``aim_m`` ahead."""
+    x = CAMERA_AHEAD_M + aim_m
+    y = aim_m * math.tan(math.radians(max(-89.0, min(89.0, bearing_deg))))
+    return 2.0 * y / (x * x + y * y)
+
+
+def curvature_action(speed_mps: float, curvature_per_m: float) -> Action:
+    """The DuckietownEnv action that settles at ``speed_mps`` on an arc of ``curvature_per_m`` (no reverse)."""
+    v = max(0.0, speed_mps)
+    omega = v * curvature_per_m
+    return Action(v / SPEED_GAIN, omega / YAW_RATE_GAIN, v, omega)
+
+
+def steering_action(steering_deg: float, speed_mps: float, aim_m: float) -> Action:
+    """fearguard's command (steering bearing, speed) → the action: pure pursuit to the aim point."""
+    return curvature_action(speed_mps, pursuit_curvature_per_m(steering_deg, aim_m))
