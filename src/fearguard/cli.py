@@ -1,4 +1,4 @@
-"""Command line: ``fearguard demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``suite``, ``verify``.
+"""Command line: ``fearguard demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``suite``, ``verify``, ``duckietown``.
 
 A thin layer: it parses arguments, calls the library, prints, and maps errors to exit codes
 (0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr).
@@ -238,6 +238,48 @@ def cmd_verify(args: argparse.Namespace) -> int:
     return verify_command(args.rules, args.vehicle, args.steer, args.examples, args.seed, args.out, only, args.replay)
 
 
+def cmd_duckietown(args: argparse.Namespace) -> int:
+    """One drive in gym-duckietown (guarded, or a baseline) → log.jsonl, summary.json, plots (and annotated.mp4)."""
+    from fearguard.worlds.duckietown.drive import DriveOptions, drive
+    from fearguard.worlds.duckietown.report import print_drive
+
+    if args.list_maps:
+        from fearguard.worlds.duckietown.world import map_names
+
+        print("\n".join(map_names()))
+        return 0
+    if args.map is None or args.out is None:
+        raise FearguardError("duckietown: give a MAP (see --list-maps) and --out DIR")
+    try:
+        options = DriveOptions(
+            map_name=args.map, seconds=args.seconds, controller=args.baseline or "guarded", cruise_mps=args.cruise_mps,
+            obstacle=args.obstacle, ahead_m=args.ahead, remove_after_s=args.remove_after, range_sensor=args.range,
+            domain_rand=args.domain_rand, seed=args.seed, width_px=args.width, height_px=args.width * 3 // 4, rules=args.rules,
+            video=args.video, plots=not args.no_plots,
+        )
+    except ValueError as exc:
+        raise FearguardError(f"duckietown: {exc}") from None
+    with _Progress(f"duckietown {args.map}") as progress:
+        result = drive(options, args.out, progress.update)
+    print_drive(result.summary)
+    print(f"wrote {args.out}/log.jsonl, summary.json, drive.png" + (", timeline.png" if options.controller == "guarded" else "")
+          + (", annotated.mp4" if args.video else ""))
+    if result.interrupted:
+        print("interrupted: the log holds every step driven so far")
+        return 130
+    return 0
+
+
+def cmd_duckietown_suite(args: argparse.Namespace) -> int:
+    """The development maps guarded / unguarded / expert, obstacles, domain randomisation → suite.md, suite.json."""
+    from fearguard.worlds.duckietown.suite import run_suite
+
+    table = run_suite(args.out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, on_run=print)
+    print(table)
+    print(f"wrote {args.out}/suite.md, suite.json")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fearguard", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -310,6 +352,31 @@ def build_parser() -> argparse.ArgumentParser:
     verify.add_argument("--out", default="fearguard-counterexamples", help="folder for counterexample files")
     verify.add_argument("--replay", default=None, help="re-run a counterexample file instead: exit 1 if it still fails")
     verify.set_defaults(func=cmd_verify)
+    dt = sub.add_parser("duckietown", help="drive a Duckiebot in gym-duckietown (needs `bash .ci/duckietown.sh`)")
+    dt.add_argument("map", nargs="?", default=None, help="map name, e.g. loop_empty, small_loop, zigzag_dists, straight_road")
+    dt.add_argument("--out", default=None, help="output folder (log.jsonl, summary.json, drive.png, timeline.png, annotated.mp4)")
+    dt.add_argument("--seconds", type=float, default=60.0, help="simulated duration (default 60)")
+    dt.add_argument("--cruise-mps", type=float, default=0.2, help="cruise speed (default 0.2 m/s)")
+    dt.add_argument("--obstacle", choices=("duck", "cone", "duckiebot"), default=None, help="a static obstacle on the lane ahead")
+    dt.add_argument("--ahead", type=float, default=1.0, help="its distance ahead of the front bumper along the lane (m, default 1.0)")
+    dt.add_argument("--remove-after", type=float, default=3.0, help="take it away after the robot stood still this long (s)")
+    dt.add_argument("--range", choices=("none", "tof"), default="none", help="range sensor: none (a DB18) or a front time-of-flight")
+    dt.add_argument("--baseline", choices=("unguarded", "expert"), default=None,
+                    help="unguarded: the lane steering alone at cruise; expert: the simulator's ground-truth pure pursuit")
+    dt.add_argument("--domain-rand", action="store_true", help="the simulator's domain randomisation (lighting, colours, camera pose)")
+    dt.add_argument("--seed", type=int, default=0, help="random seed (domain randomisation, sensor noise)")
+    dt.add_argument("--width", type=int, default=320, help="camera width in pixels, 4:3 (default 320; 160 is faster)")
+    dt.add_argument("--rules", default=None, help="rule file (default: the bundled rules/duckiebot.toml)")
+    dt.add_argument("--video", action="store_true", help="also write annotated.mp4")
+    dt.add_argument("--no-plots", action="store_true", help="skip drive.png and timeline.png")
+    dt.add_argument("--list-maps", action="store_true", help="print the maps the simulator ships and exit")
+    dt.set_defaults(func=cmd_duckietown)
+    dts = sub.add_parser("duckietown-suite", help="the development maps guarded and with both baselines, obstacles, 10 randomised seeds")
+    dts.add_argument("--out", required=True, help="output folder (one folder per run, suite.md, suite.json)")
+    dts.add_argument("--seconds", type=float, default=60.0, help="duration of each drive (default 60)")
+    dts.add_argument("--seeds", type=int, default=10, help="domain-randomised seeds (default 10)")
+    dts.add_argument("--maps", nargs="*", default=None, help="lane maps (default: loop_empty small_loop zigzag_dists straight_road)")
+    dts.set_defaults(func=cmd_duckietown_suite)
     return parser
 
 

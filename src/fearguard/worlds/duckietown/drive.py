@@ -215,8 +215,8 @@ def _timing(guard_ms: list[float], sim_ms: list[float]) -> dict[str, Any]:
     out: dict[str, Any] = {"simulator_ms_median": sim, "simulator_ms_mean": float(np.mean(sim_ms)) if sim_ms else math.nan}
     if guard_ms:
         g = float(np.median(guard_ms))
-        out.update(controller_ms_median=g, controller_ms_mean=float(np.mean(guard_ms)), controller_ms_p95=float(np.percentile(guard_ms, 95)),
-                   controller_share_of_simulator_step=g / sim if sim > 0 else None)
+        out.update(controller_ms_median=g, controller_ms_mean=float(np.mean(guard_ms)),
+                   controller_ms_p95=float(np.percentile(guard_ms, 95)), controller_share_of_simulator_step=g / sim if sim > 0 else None)
     return out
 
 
@@ -245,7 +245,8 @@ def plot_drive(records: list[dict[str, Any]], path: Path, title: str) -> Path:
     d = [math.nan if r.get("lane_offset_m") is None else r["lane_offset_m"] for r in records]
     ax1.plot(t, d, color="black", label="lane offset (+ right)")
     for value, colour, label in ((WHITE_OUTER_M - W, "red", "wheel off the road"), (WHITE_INNER_M - W, "grey", "wheel on the white tape"),
-                                 (YELLOW_INNER_M + W, "goldenrod", "wheel on the yellow line"), (YELLOW_OUTER_M + W, "darkred", "wheel in the other lane")):
+                                 (YELLOW_INNER_M + W, "goldenrod", "wheel on the yellow line"),
+                                 (YELLOW_OUTER_M + W, "darkred", "wheel in the other lane")):
         ax1.axhline(value, color=colour, linestyle="--", linewidth=1, label=label)
     ax1.set_xlabel("t [s]")
     ax1.set_ylabel("lane offset [m]")

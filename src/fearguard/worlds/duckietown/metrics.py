@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -120,7 +121,7 @@ def _obstacle_summary(samples: Sequence[Sample], gaps: Sequence[float]) -> dict[
     present = [s for s in samples if s.obstacle_present]
     touched = any(s.collided for s in present)
     stopped = next((s for s in present if s.speed_mps <= STOPPED_SPEED_MPS and s.t_s > 0.5), None)
-    removed_at = next((b for a, b in zip(samples, samples[1:], strict=False) if a.obstacle_present and not b.obstacle_present), None)
+    removed_at = next((b for a, b in pairwise(samples) if a.obstacle_present and not b.obstacle_present), None)
     after = samples[-1].progress_m - removed_at.progress_m if removed_at is not None else None
     finite = [g for g in gaps if math.isfinite(g)]
     return {

@@ -71,13 +71,13 @@ def aim_distance_m(camera: CameraModel) -> float:
 def duckiebot_limits(*, time_of_flight: bool = False) -> VehicleLimits:
     """A 1:20 Duckiebot: 0.5 m/s top speed, no range sensor (or a front time-of-flight sensor, 0.05–1.2 m).
 
-    Braking: the speed decays with τ = 0.2 s after a 0.15 s delay (distance v·(0.15 + 0.2)); planning
-    with 0.5 m/s² after 0.25 s covers that for every speed up to the top speed. The steering limit is
-    the camera's half field of view: a bearing outside it cannot come from the picture.
+    Braking: the speed decays with τ = 0.2 s after the 0.15 s delay, so a stop takes v·(0.15 + 0.2) m;
+    planning with a 0.35 s reaction and 0.5 m/s² (v·0.35 + v²) covers it at every speed. The steering
+    limit is the camera's half field of view: a bearing outside it cannot come from the picture.
     """
     half_hfov = math.degrees(math.atan((DEFAULT_FRAME_PX[0] / 2.0) / duckiebot_camera().fx_px))
     return VehicleLimits(
-        max_speed_mps=0.5, max_decel_mps2=0.5, reaction_time_s=0.25, stop_margin_m=0.05,
+        max_speed_mps=0.5, max_decel_mps2=0.5, reaction_time_s=ACTUATION_DELAY_S + SPEED_TIME_CONSTANT_S, stop_margin_m=0.05,
         max_steering_deg=round(half_hfov, 1), has_ultrasonic=time_of_flight, has_qr_localisation=False,
         ultrasonic_min_range_m=TOF_MIN_RANGE_M, ultrasonic_max_range_m=TOF_MAX_RANGE_M,
     )

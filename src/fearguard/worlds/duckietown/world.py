@@ -7,8 +7,9 @@ here takes three fixes, all applied at run time without editing installed files:
   which numpy ≥ 1.24 rejects as a ragged array: a wrapper flattens the one-element arrays first.
 - ``gym_duckietown`` is imported before ``geometry`` (otherwise geometry wants the ``decorator`` package).
 
-Ground truth uses the simulator's own functions: ``get_lane_pos2`` (its ``dist`` is + to the RIGHT of
-the lane centre, the opposite of its docstring), ``closest_curve_point``, ``_valid_pose`` ("invalid
+Ground truth uses the simulator's own functions: ``get_lane_pos2`` (its ``dist`` and ``angle_deg`` are
++ to the RIGHT of the lane centre and direction, the opposite of its docstring; fearguard's heading
+error is + to the left, as its angles), ``closest_curve_point``, ``_valid_pose`` ("invalid
 pose": a wheel off the drivable tiles, or contact) and ``_collision`` (contact with an object).
 The renderer is noise-free; the camera frame gets Gaussian sensor noise (σ grey levels, seeded)
 so a standing robot does not give byte-identical frames, as no real camera does.
@@ -80,8 +81,8 @@ def _simulator() -> Any:
         pyglet.options["headless"] = True
         pyglet.options["debug_gl"] = False  # no glGetError after every GL call (~10 % of a step)
         with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):  # gym's banner, pyglet's options
-            import gym_duckietown.simulator as sim  # before geometry (see the module docstring)
             import geometry
+            import gym_duckietown.simulator as sim  # before geometry (see the module docstring)
     except ImportError as exc:
         raise SimulatorMissing(
             f"the Duckietown simulator is not importable here ({exc}); create its environment with "
@@ -269,7 +270,7 @@ class DuckietownWorld:
         pos, angle = env.cur_pos, env.cur_angle
         try:
             lp = env.get_lane_pos2(pos, angle)
-            offset, heading = float(lp.dist), float(lp.angle_deg)
+            offset, heading = float(lp.dist), -float(lp.angle_deg)  # its angle is + to the right, like its dist
         except sim.NotInLane:
             offset = heading = math.nan
         corners = sim.get_agent_corners(pos, angle)

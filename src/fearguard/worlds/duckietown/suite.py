@@ -1,0 +1,130 @@
+"""The Duckietown suite: development lane maps guarded / unguarded / expert, obstacles, domain randomisation.
+
+Rows are written as they finish (suite.json, suite.md), so an interrupted suite keeps its rows. The
+criteria of issue 14 are checked at the end from the rows:
+- lane maps, guarded, 0.2 m/s: no departure, no collision, progress ≥ 90 % of the expert's;
+- a duck or cone in the lane, no range sensor: stops before contact, goes on once it is removed;
+- domain randomisation over the seeds of one lane map: no collision, no departure, progress ≥ 80 %.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fearguard.report import json_value
+from fearguard.worlds.duckietown.drive import DriveOptions, drive
+from fearguard.worlds.duckietown.report import suite_markdown
+
+LANE_MAPS = ("loop_empty", "small_loop", "zigzag_dists", "straight_road")
+DOMAIN_RAND_MAP = "loop_empty"
+LANE_PROGRESS_SHARE = 0.9  # [-] of the expert's progress, guarded on a lane map
+DOMAIN_RAND_PROGRESS_SHARE = 0.8  # [-] likewise under domain randomisation
+OBSTACLE_SECONDS = 30.0  # [s] an obstacle drive: approach, stop, wait, go on
+OBSTACLE_RUNS = (  # (name, map, obstacle, range sensor, controller): 1 m ahead on a straight, and on loop_empty's first curve
+    ("straight_road + duck", "straight_road", "duck", "none", "guarded"),
+    ("straight_road + duck", "straight_road", "duck", "none", "unguarded"),
+    ("straight_road + duck, ToF", "straight_road", "duck", "tof", "guarded"),
+    ("straight_road + cone", "straight_road", "cone", "none", "guarded"),
+    ("loop_empty + duck on the curve", "loop_empty", "duck", "none", "guarded"),
+)
+
+
+def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None) -> list[tuple[str, DriveOptions]]:
+    """Every drive of the suite, experts first (the other rows are compared to them)."""
+    base = DriveOptions(seconds=seconds, plots=True)
+    runs: list[tuple[str, DriveOptions]] = []
+    for m in maps or LANE_MAPS:
+        runs += [(m, replace(base, map_name=m, controller=c)) for c in ("expert", "guarded", "unguarded")]
+    for name, m, obstacle, sensor, controller in OBSTACLE_RUNS:
+        runs.append((name, replace(base, map_name=m, obstacle=obstacle, range_sensor=sensor, controller=controller,
+                                   seconds=min(seconds, OBSTACLE_SECONDS))))
+    for seed in range(seeds):
+        for c in ("expert", "guarded"):
+            options = replace(base, map_name=DOMAIN_RAND_MAP, domain_rand=True, seed=seed, controller=c)
+            runs.append((f"{DOMAIN_RAND_MAP} rand {seed}", options))
+    return runs
+
+
+def _row(name: str, options: DriveOptions, s: dict[str, Any], experts: dict[str, float]) -> dict[str, Any]:
+    expert = experts.get(name) if options.obstacle is None else None
+    timing = s.get("timing", {})
+    return {
+        "run": name, "controller": options.controller, "map": options.map_name, "seed": options.seed, "domain_rand": options.domain_rand,
+        "obstacle_kind": options.obstacle, "range_sensor": options.range_sensor,
+        "progress_m": s["progress_m"], "progress_vs_expert_pct": 100 * s["progress_m"] / expert if expert else None,
+        "departures": s["departures"], "centre_line_crossings": s["centre_line_crossings"], "collisions": s["collisions"],
+        "invalid_pose": s["invalid_pose"], "emergency_s": s["time_in_mode_s"]["EMERGENCY"], "lane_offset_rms_m": s.get("lane_offset_rms_m"),
+        "lane_offset_max_m": s.get("lane_offset_max_m"), "marking_share": s["marking_share"], "obstacle": s.get("obstacle"),
+        "controller_ms": timing.get("controller_ms_median"), "simulator_ms": timing.get("simulator_ms_median"),
+    }
+
+
+def criteria(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Issue 14's Done-when criteria, each with ok and the numbers behind it."""
+    out = []
+    lane = [r for r in rows if r["controller"] == "guarded" and r["obstacle_kind"] is None and not r["domain_rand"]]
+    for r in lane:
+        share = (r["progress_vs_expert_pct"] or 0) / 100
+        ok = r["departures"] == 0 and r["collisions"] == 0 and not r["invalid_pose"] and share >= LANE_PROGRESS_SHARE
+        out.append({"criterion": f"{r['run']}: no departure, no collision, progress >= 90 % of the expert's", "ok": ok,
+                    "detail": f"departures {r['departures']}, collisions {r['collisions']}, invalid pose {r['invalid_pose']}, "
+                              f"progress {100 * share:.0f} %"})
+    for r in rows:
+        if r["obstacle_kind"] is not None and r["controller"] == "guarded" and r["range_sensor"] == "none":
+            ob = r["obstacle"] or {}
+            ok = bool(ob.get("stopped_before_contact")) and bool(ob.get("went_on"))
+            out.append({"criterion": f"{r['run']}, no range sensor: stops before contact, goes on once removed", "ok": ok,
+                        "detail": f"contact {ob.get('contact')}, stopped before contact {ob.get('stopped_before_contact')}, "
+                                  f"went on {ob.get('went_on')}"})
+    rand = [r for r in rows if r["controller"] == "guarded" and r["domain_rand"]]
+    if rand:
+        bad = [r["run"] for r in rand if r["departures"] or r["collisions"] or r["invalid_pose"]
+               or (r["progress_vs_expert_pct"] or 0) < 100 * DOMAIN_RAND_PROGRESS_SHARE]
+        shares = [r["progress_vs_expert_pct"] or 0 for r in rand]
+        out.append({"criterion": f"{DOMAIN_RAND_MAP}, domain randomisation, {len(rand)} seeds: no collision, no departure, "
+                                 "progress >= 80 %", "ok": not bad,
+                    "detail": f"failing seeds: {', '.join(bad) or 'none'}; progress {min(shares):.0f}–{max(shares):.0f} % of the expert's"})
+    return out
+
+
+def cost_line(rows: Sequence[dict[str, Any]]) -> str:
+    """fearguard's per-step cost in the loop over every guarded drive (medians of the per-drive medians)."""
+    g = [r["controller_ms"] for r in rows if r["controller"] == "guarded" and r["controller_ms"] is not None]
+    s = [r["simulator_ms"] for r in rows if r["controller"] == "guarded" and r["simulator_ms"] is not None]
+    if not g or not s:
+        return ""
+    gm, sm = float(np.median(g)), float(np.median(s))
+    return (f"fearguard per step (perception + supervisor): {gm:.1f} ms median over {len(g)} guarded drives; the simulator's "
+            f"step (physics + rendering): {sm:.1f} ms; fearguard = {100 * gm / sm:.0f} % of a simulator step")
+
+
+def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps: Sequence[str] | None = None,
+              on_run: Callable[[str], None] | None = None) -> str:
+    """Run the plan; each drive in its own folder; suite.md / suite.json rewritten after every drive. Returns the markdown."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    rows: list[dict[str, Any]] = []
+    experts: dict[str, float] = {}
+    markdown = ""
+    for name, options in plan(seconds, seeds, maps):
+        folder = out / f"{name.replace(' ', '_').replace(',', '').replace('+', 'with')}_{options.controller}_{options.range_sensor}"
+        result = drive(options, folder)
+        if options.controller == "expert":
+            experts[name] = result.summary["progress_m"]
+        rows.append(_row(name, options, result.summary, experts))
+        checks = criteria(rows)
+        markdown = suite_markdown(rows) + "\n" + cost_line(rows) + "\n\n" + "\n".join(
+            f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"
+        (out / "suite.md").write_text(markdown, encoding="utf-8")
+        (out / "suite.json").write_text(json.dumps(json_value({"rows": rows, "criteria": checks}), indent=2) + "\n", encoding="utf-8")
+        if on_run is not None:
+            r = rows[-1]
+            on_run(f"{name} {options.controller}: progress {r['progress_m']:.2f} m, departures {r['departures']}, "
+                   f"collisions {r['collisions']}, EMERGENCY {r['emergency_s']:.1f} s")
+    return markdown

@@ -1,0 +1,74 @@
+"""fearguard in the real gym-duckietown simulator (skipped where it is not installed: `bash .ci/duckietown.sh`).
+
+Short drives only (the software rasteriser gives ~30-50 steps/s on 2 cores); the suite measures the long ones.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("gym_duckietown", reason="the Duckietown simulator is not installed (bash .ci/duckietown.sh)")
+
+from fearguard.worlds.duckietown import DriveOptions, drive
+from fearguard.worlds.duckietown.preset import curvature_action
+from fearguard.worlds.duckietown.world import DuckietownWorld
+
+
+@pytest.fixture(scope="module")
+def world() -> DuckietownWorld:
+    w = DuckietownWorld("straight_road", width_px=160, height_px=120, seed=3)
+    yield w
+    w.close()
+
+
+def test_start_is_on_the_lane_centre_and_frames_carry_sensor_noise(world: DuckietownWorld) -> None:
+    t = world.truth()
+    assert abs(t.lane_offset_m) < 1e-6 and abs(t.heading_error_deg) < 1e-6 and not t.invalid_pose
+    a, b = world.frame_bgr().astype(float), world.frame_bgr().astype(float)
+    assert a.shape == (120, 160, 3)
+    assert 2.0 < np.std(a - b) < 3.5  # σ = 2 grey levels per frame, clipped at 0/255 in places: σ of a difference ≈ 2√2
+
+
+def test_time_of_flight_and_gap_see_the_duck_ahead(world: DuckietownWorld) -> None:
+    world.add_obstacle("duck", 0.5)
+    try:
+        gap, tof = world.truth().obstacle_gap_m, world.tof_range_m()
+        assert 0.4 < gap < 0.5  # the duck's box starts a little before its centre
+        assert tof == pytest.approx(gap, abs=0.01)  # on a straight lane the sensor looks along the gap
+    finally:
+        world.remove_obstacle()
+    assert math.isinf(world.tof_range_m()) and math.isinf(world.truth().obstacle_gap_m)
+
+
+def test_lane_offset_is_positive_to_the_right() -> None:
+    w = DuckietownWorld("straight_road", width_px=160, height_px=120)
+    try:
+        for _ in range(20):
+            t = w.step(curvature_action(0.2, -2.0))  # turning right
+        assert t.lane_offset_m > 0.0 and t.heading_error_deg < 0.0
+    finally:
+        w.close()
+
+
+def test_expert_keeps_the_lane(tmp_path: Path) -> None:
+    s = drive(DriveOptions("straight_road", seconds=3, controller="expert", width_px=160, height_px=120, plots=False), tmp_path).summary
+    assert s["departures"] == 0 and s["lane_offset_max_m"] < 0.01
+    assert 0.4 < s["progress_m"] < 0.6  # 0.2 m/s after a ~0.4 s rise
+
+
+def test_guarded_drive_writes_the_recorder_files(tmp_path: Path) -> None:
+    result = drive(DriveOptions("straight_road", seconds=2, width_px=160, height_px=120, video=True), tmp_path)
+    s = result.summary
+    lines = (tmp_path / "log.jsonl").read_text().splitlines()
+    assert len(lines) == s["steps"] == 60
+    first = json.loads(lines[0])
+    assert {"lane_confidence", "fear", "mode", "strategy", "lane_offset_m", "progress_m", "vel", "omega"} <= set(first)
+    assert json.loads((tmp_path / "summary.json").read_text())["controller"] == "guarded"
+    assert (tmp_path / "timeline.png").stat().st_size > 0 and (tmp_path / "drive.png").stat().st_size > 0
+    assert (tmp_path / "annotated.mp4").stat().st_size > 0
+    assert s["timing"]["controller_ms_median"] > 0 and not s["invalid_pose"]
