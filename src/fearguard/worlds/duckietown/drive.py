@@ -132,7 +132,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
     world = DuckietownWorld(o.map_name, width_px=o.width_px, height_px=o.height_px, seed=o.seed, domain_rand=o.domain_rand,
-                            start_tile=o.start_tile)
+                            start_tile=o.start_tile, render=o.controller != "expert" or o.video)
     camera = duckiebot_camera(o.width_px, o.height_px)
     aim_m = aim_distance_m(camera)
     limits = duckiebot_limits(time_of_flight=o.range_sensor == "tof")
@@ -240,7 +240,7 @@ def plot_drive(records: list[dict[str, Any]], path: Path, title: str) -> Path:
     ax0.set_aspect("equal")
     ax0.set_xlabel("x [m]")
     ax0.set_ylabel("y [m]")
-    ax0.set_title("path (green NORMAL, orange CAUTION, red EMERGENCY, blue unsupervised)")
+    ax0.set_title("path: green NORMAL, orange CAUTION, red EMERGENCY\n(blue: no supervisor)", fontsize=9)
     t = [r["t_s"] for r in records]
     d = [math.nan if r.get("lane_offset_m") is None else r["lane_offset_m"] for r in records]
     ax1.plot(t, d, color="black", label="lane offset (+ right)")

@@ -81,8 +81,8 @@ def _simulator() -> Any:
         pyglet.options["headless"] = True
         pyglet.options["debug_gl"] = False  # no glGetError after every GL call (~10 % of a step)
         with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):  # gym's banner, pyglet's options
-            import geometry
-            import gym_duckietown.simulator as sim  # before geometry (see the module docstring)
+            import gym_duckietown.simulator as sim  # first: it disables PyContracts, which geometry needs otherwise
+        import geometry  # kept out of the block above: an import sorter must not move it before the simulator
     except ImportError as exc:
         raise SimulatorMissing(
             f"the Duckietown simulator is not importable here ({exc}); create its environment with "
@@ -111,10 +111,14 @@ def map_names() -> list[str]:
 
 
 class DuckietownWorld:
-    """One robot in one map: step it with an Action, read its camera and its ground truth."""
+    """One robot in one map: step it with an Action, read its camera and its ground truth.
+
+    ``render=False`` skips the rendering of every step (90 % of its cost) for a controller that uses
+    only the ground truth; ``frame_bgr`` then keeps returning the first frame.
+    """
 
     def __init__(self, map_name: str, *, width_px: int, height_px: int, seed: int = 0, domain_rand: bool = False,
-                 noise_grey: float = SENSOR_NOISE_GREY, start_tile: tuple[int, int] | None = None) -> None:
+                 noise_grey: float = SENSOR_NOISE_GREY, start_tile: tuple[int, int] | None = None, render: bool = True) -> None:
         sim = _simulator()
         from gym_duckietown.envs import DuckietownEnv
 
@@ -134,6 +138,8 @@ class DuckietownWorld:
         self._obstacle: Any = None
         self._start_tile = start_tile
         self.obs_rgb = self._reset()
+        if not render:  # a controller that never looks (the ground-truth expert): physics only, the first frame kept
+            self.env.render_obs = lambda *args, **kwargs: self.obs_rgb
         self._progress_m = 0.0
         self._last_pos = np.array(self.env.cur_pos, dtype=float)
 
