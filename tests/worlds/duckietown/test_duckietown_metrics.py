@@ -63,3 +63,12 @@ def test_obstacle_outcome_contact() -> None:
     s = summarize_drive(samples, DT)
     assert s["collisions"] == 1 and s["invalid_pose"]
     assert s["obstacle"]["contact"] and not s["obstacle"]["stopped_before_contact"] and not s["obstacle"]["went_on"]
+
+
+def test_route_completion_laps_or_share() -> None:
+    from fearguard.worlds.duckietown.metrics import route_completion
+
+    assert route_completion(24.0, 12.0, True)["laps"] == pytest.approx(2.0)
+    open_route = route_completion(30.0, 21.0, False)
+    assert open_route["route_completion"] == 1.0 and open_route["laps"] is None
+    assert route_completion(1.0, 0.0, False)["route_completion"] is None

@@ -72,3 +72,35 @@ def test_guarded_drive_writes_the_recorder_files(tmp_path: Path) -> None:
     assert (tmp_path / "timeline.png").stat().st_size > 0 and (tmp_path / "drive.png").stat().st_size > 0
     assert (tmp_path / "annotated.mp4").stat().st_size > 0
     assert s["timing"]["controller_ms_median"] > 0 and not s["invalid_pose"]
+
+
+def test_loop_route_is_one_lap(world: DuckietownWorld) -> None:
+    straight, closed = world.route_m(limit_m=3.0)
+    assert (straight, closed) == (pytest.approx(3.0, abs=0.06), False)  # straight_road: 21 m, measured up to the limit
+    loop = DuckietownWorld("loop_empty", width_px=160, height_px=120, render=False)
+    try:
+        length, closed = loop.route_m()
+        assert closed and 10.0 < length < 14.0  # 18 tiles of 0.585 m, curves cut short
+    finally:
+        loop.close()
+
+
+def test_pure_pursuit_to_a_perfect_aim_point_keeps_the_lane() -> None:
+    """The actuation alone: the true lane centre's bearing at the aim distance, through steering_action (no vision)."""
+    from fearguard.worlds.duckietown.preset import CAMERA_AHEAD_M, aim_distance_m, duckiebot_camera, steering_action
+
+    w = DuckietownWorld("loop_empty", width_px=160, height_px=120, render=False)
+    aim = aim_distance_m(duckiebot_camera(160, 120))
+    try:
+        env, worst = w.env, 0.0
+        for _ in range(450):  # 15 s: the first straight and the first curve
+            point, tangent = env.closest_curve_point(env.cur_pos, env.cur_angle)
+            target = w.walk(point, tangent, CAMERA_AHEAD_M + aim)[0]
+            dx, dy = target[0] - env.cur_pos[0], -(target[2] - env.cur_pos[2])
+            c, s = math.cos(env.cur_angle), math.sin(env.cur_angle)
+            x, y = c * dx + s * dy, -s * dx + c * dy
+            t = w.step(steering_action(math.degrees(math.atan2(y, x - CAMERA_AHEAD_M)), 0.2, aim))
+            worst = max(worst, abs(t.lane_offset_m))
+        assert not t.invalid_pose and worst < 0.06 and t.progress_m > 2.5
+    finally:
+        w.close()

@@ -31,7 +31,7 @@ from fearguard.report import JsonlLog, command_record, json_value, plot_timeline
 from fearguard.sim.loop import _unsupervised_steering
 from fearguard.supervisor import Command, FearGuard, Observation
 from fearguard.vision.lane_steering import HoughLaneSteering
-from fearguard.worlds.duckietown.metrics import STOPPED_SPEED_MPS, Sample, summarize_drive
+from fearguard.worlds.duckietown.metrics import STOPPED_SPEED_MPS, Sample, route_completion, summarize_drive
 from fearguard.worlds.duckietown.preset import (
     FRAME_RATE_HZ,
     aim_distance_m,
@@ -91,37 +91,41 @@ class DriveResult:
 
 
 class _Recorder:
-    """log.jsonl (flushed per step), annotated.mp4; at the end summary.json and the plots."""
+    """log.jsonl (flushed per step), annotated.mp4; at the end summary.json and the plots.
 
-    def __init__(self, out: Path | None, video: bool) -> None:
-        self.out = out
-        self.log = JsonlLog(out / "log.jsonl") if out is not None else None
-        self.video = VideoOut(str(out / "annotated.mp4"), FRAME_RATE_HZ) if out is not None and video else None
+    The same calls as the project's one recorder for every driver (frame / close / write_summary /
+    plot_timeline), so this small stand-in gives way to it without touching the loop.
+    """
 
-    def write(self, record: dict[str, Any], frame: np.ndarray | None, cmd: Command | None, analysis: Any, label: str) -> None:
-        if self.log is not None:
-            self.log.write(record)
-        if self.video is not None and frame is not None:
-            self.video.write(annotate(frame, cmd, analysis, label))
+    def __init__(self, out_dir: Path | None, *, fps: float, video: bool = False) -> None:
+        self.out_dir = out_dir
+        self._log = JsonlLog(out_dir / "log.jsonl") if out_dir is not None else None
+        self._video = VideoOut(str(out_dir / "annotated.mp4"), fps) if out_dir is not None and video else None
+
+    def frame(self, frame: int, t_s: float, cmd: Command | None, *, image: np.ndarray | None = None, analysis: Any = None,
+              caption: str = "", speed_mps: float | None = None, fields: dict[str, Any] | None = None) -> None:
+        if self._video is not None and image is not None:
+            self._video.write(annotate(image, cmd, analysis, caption))
+        if self._log is not None:
+            self._log.write(command_record(frame, t_s, cmd, **(fields or {})))
 
     def close(self) -> None:
-        if self.log is not None:
-            self.log.close()
-        if self.video is not None:
-            self.video.close()
+        if self._log is not None:
+            self._log.close()
+        if self._video is not None:
+            self._video.close()
 
-    def finish(self, summary: dict[str, Any], title: str, plots: bool) -> dict[str, Any]:
-        if self.out is None:
-            return summary
-        records = read_jsonl(self.out / "log.jsonl")
-        summary = {**summary, "supervisor": summarize(records) if records and "fear" in records[0] else None}
-        summary = json_value(summary)
-        (self.out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n", encoding="utf-8")
-        if plots and records:
-            if "fear" in records[0]:
-                plot_timeline(records, self.out / "timeline.png", title=title, extra_speed="speed_mps")
-            plot_drive(records, self.out / "drive.png", title)
-        return summary
+    def records(self) -> list[dict[str, Any]]:
+        return read_jsonl(self.out_dir / "log.jsonl") if self.out_dir is not None else []
+
+    def write_summary(self, summary: dict[str, Any]) -> None:
+        if self.out_dir is not None:
+            (self.out_dir / "summary.json").write_text(json.dumps(json_value(summary), indent=2, allow_nan=False) + "\n", encoding="utf-8")
+
+    def plot_timeline(self, title: str = "", with_speed: bool = False) -> None:
+        records = self.records()
+        if self.out_dir is not None and records and "fear" in records[0]:
+            plot_timeline(records, self.out_dir / "timeline.png", title=title, extra_speed="speed_mps" if with_speed else None)
 
 
 def drive(options: DriveOptions, out_dir: str | Path | None = None,
@@ -139,8 +143,9 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     lanes = HoughLaneSteering(camera=camera, fps=FRAME_RATE_HZ)
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
     guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=camera) if o.controller == "guarded" else None
+    route = world.route_m()
     obstacle_xz = world.add_obstacle(o.obstacle, o.ahead_m) if o.obstacle is not None else None
-    recorder = _Recorder(out, o.video)
+    recorder = _Recorder(out, fps=FRAME_RATE_HZ, video=o.video)
     total = math.ceil(o.seconds * FRAME_RATE_HZ)
     samples: list[Sample] = []
     guard_ms: list[float] = []
@@ -174,15 +179,16 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
             samples.append(Sample(truth.t_s, truth.speed_mps, truth.lane_offset_m, truth.progress_m, truth.invalid_pose, truth.collided,
                                   truth.obstacle_gap_m, present, cmd.mode.name if cmd else None, cmd.strategy.name if cmd else None,
                                   cmd.fear if cmd else None))
-            record = command_record(
-                k, samples[-1].t_s, cmd, controller=o.controller, speed_target_mps=speed, applied_steering_deg=steering,
+            fields = dict(
+                controller=o.controller, speed_target_mps=speed, applied_steering_deg=steering,
                 vel=action.vel, omega=action.omega, yaw_rate_rps=action.yaw_rate_rps, speed_mps=truth.speed_mps,
                 progress_m=truth.progress_m, lane_offset_m=truth.lane_offset_m, heading_error_deg=truth.heading_error_deg,
                 x_m=truth.x_m, y_m=truth.y_m, yaw_rad=truth.yaw_rad, invalid_pose=truth.invalid_pose, collided=truth.collided,
                 obstacle_gap_m=truth.obstacle_gap_m, obstacle_present=present, tof_m=tof,
             )
             analysis = guard.last_perception.analysis if guard is not None and guard.last_perception is not None else None
-            recorder.write(record, frame, cmd, analysis, f"v {truth.speed_mps:.2f} m/s")
+            recorder.frame(k, samples[-1].t_s, cmd, image=frame, analysis=analysis, caption=f"v {truth.speed_mps:.2f} m/s",
+                           speed_mps=truth.speed_mps, fields=fields)
             if on_step is not None:
                 on_step(k + 1, total)
             if truth.invalid_pose:
@@ -198,6 +204,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
         recorder.close()
         world.close()
     summary = summarize_drive(samples, world.dt_s)
+    summary.update(route_completion(summary["progress_m"], *route))
     summary.update(
         map=o.map_name, controller=o.controller, seed=o.seed, options={**asdict(o), "start_tile": o.start_tile},
         obstacle_xz_m=obstacle_xz, interrupted=interrupted, aim_distance_m=aim_m,
@@ -205,7 +212,13 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
         camera=asdict(camera), vehicle=asdict(limits), rules=rules.name,
     )
     title = f"fearguard in Duckietown: {o.map_name}, {o.controller}" + (f", {o.obstacle} {o.ahead_m:g} m ahead" if o.obstacle else "")
-    summary = recorder.finish(summary, title, o.plots) if out is not None else json_value(summary)
+    records = recorder.records()
+    summary["supervisor"] = summarize(records) if records and "fear" in records[0] else None
+    summary = json_value(summary)
+    recorder.write_summary(summary)
+    if o.plots and out is not None and records:
+        recorder.plot_timeline(title, with_speed=True)
+        plot_drive(records, out / "drive.png", title)
     return DriveResult(summary, out, interrupted)
 
 

@@ -77,6 +77,15 @@ def rising_edges(flags: Sequence[bool]) -> int:
     return count
 
 
+def route_completion(progress_m: float, route_m: float, closed: bool) -> dict[str, Any]:
+    """Laps of a loop, or the share of an open route driven (capped at 1)."""
+    if route_m <= 0:
+        return {"route_m": route_m, "route_closed": closed, "laps": None, "route_completion": None}
+    share = max(0.0, progress_m) / route_m
+    return {"route_m": route_m, "route_closed": closed, "laps": share if closed else None,
+            "route_completion": None if closed else min(1.0, share)}
+
+
 def summarize_drive(samples: Sequence[Sample], dt_s: float) -> dict[str, Any]:
     """JSON-ready numbers of a drive (NaN/inf become None)."""
     if not samples:

@@ -15,7 +15,10 @@ def drive_lines(s: Mapping[str, Any]) -> list[str]:
     modes = s.get("time_in_mode_s", {})
     lines = [
         f"{s.get('map')} ({s.get('controller')}, seed {s.get('seed')}): {s.get('duration_s', 0):.1f} s, "
-        f"progress {s.get('progress_m', 0):.2f} m, mean speed {_f(s.get('mean_speed_mps'))} m/s",
+        f"progress {s.get('progress_m', 0):.2f} m ("
+        + (f"{s['laps']:.2f} laps of {s['route_m']:.2f} m" if s.get("laps") is not None else
+           f"{100 * (s.get('route_completion') or 0):.0f} % of the {s.get('route_m', 0):.1f} m route")
+        + f"), mean speed {_f(s.get('mean_speed_mps'))} m/s",
         f"lane offset RMS {_f(s.get('lane_offset_rms_m'), '.3f')} m, max {_f(s.get('lane_offset_max_m'), '.3f')} m, "
         f"wheel on a marking {100 * (s.get('marking_share') or 0):.0f} % of the time",
         f"departures {s.get('departures')}, centre-line crossings {s.get('centre_line_crossings')}, collisions {s.get('collisions')}, "

@@ -42,6 +42,7 @@ WALK_STEP_M = 0.05  # [m] step when walking along the lane centre (look-ahead po
 OBSTACLE_HEIGHT_M = {"duck": 0.06, "cone": 0.08, "duckiebot": 0.12}  # [m] as the bundled maps use them
 OBSTACLE_MESH = {"duck": "duckie", "cone": "cone", "duckiebot": "duckiebot"}  # our names → the simulator's kinds
 TOF_RAYS = 11  # [-] rays across the time-of-flight cone
+ROUTE_LIMIT_M = 60.0  # [m] the longest route measured (a lap of the largest bundled loops is ~30 m)
 
 
 class SimulatorMissing(FearguardError):
@@ -191,6 +192,21 @@ class DuckietownWorld:
             point, tangent = nxt
             walked += WALK_STEP_M * 4
         return walked
+
+    def route_m(self, limit_m: float = ROUTE_LIMIT_M) -> tuple[float, bool]:
+        """Length of the lane ahead from the start: (one lap, True) on a loop, (to the lane's end, False) otherwise."""
+        env = self.env
+        start, tangent = env.closest_curve_point(env.cur_pos, env.cur_angle)
+        point, walked = np.asarray(start, dtype=float), 0.0
+        while walked < limit_m:
+            nxt = self.walk(point, tangent, WALK_STEP_M)
+            if nxt is None:
+                return walked, False
+            point, tangent = nxt
+            walked += WALK_STEP_M
+            if walked > 1.0 and np.linalg.norm(point - start) < WALK_STEP_M:
+                return walked, True
+        return walked, False
 
     def walk(self, point: np.ndarray, tangent: np.ndarray, distance_m: float) -> tuple[np.ndarray, np.ndarray] | None:
         """The lane-centre point and tangent ``distance_m`` further along the lane (None: the lane ends)."""
