@@ -104,3 +104,10 @@ def test_pure_pursuit_to_a_perfect_aim_point_keeps_the_lane() -> None:
         assert not t.invalid_pose and worst < 0.06 and t.progress_m > 2.5
     finally:
         w.close()
+
+
+def test_a_misspelt_map_gets_a_suggestion() -> None:
+    from fearguard.worlds.duckietown.world import MapError
+
+    with pytest.raises(MapError, match="did you mean loop_empty"):
+        DuckietownWorld("loop_emtpy", width_px=160, height_px=120)

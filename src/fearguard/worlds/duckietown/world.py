@@ -18,6 +18,7 @@ so a standing robot does not give byte-identical frames, as no real camera does.
 from __future__ import annotations
 
 import contextlib
+import difflib
 import io
 import logging
 import math
@@ -123,15 +124,18 @@ class DuckietownWorld:
         sim = _simulator()
         from gym_duckietown.envs import DuckietownEnv
 
+        known = map_names()
+        if map_name not in known:
+            close = difflib.get_close_matches(map_name, known, n=3)
+            hint = f"did you mean {', '.join(close)}? " if close else ""
+            raise MapError(f"map {map_name!r} is not one of the simulator's {len(known)} maps; {hint}"
+                           "see `fearguard duckietown --list-maps`")
         self._sim = sim
-        try:
-            with contextlib.redirect_stderr(io.StringIO()):
-                self.env = DuckietownEnv(
-                    map_name=map_name, domain_rand=domain_rand, camera_width=width_px, camera_height=height_px,
-                    seed=seed, max_steps=10**9, frame_rate=FRAME_RATE_HZ, accept_start_angle_deg=4,
-                )
-        except (FileNotFoundError, KeyError, ValueError) as exc:
-            raise MapError(f"map {map_name!r}: the simulator cannot load it ({exc}); see `fearguard duckietown --list-maps`") from None
+        with contextlib.redirect_stderr(io.StringIO()):
+            self.env = DuckietownEnv(
+                map_name=map_name, domain_rand=domain_rand, camera_width=width_px, camera_height=height_px,
+                seed=seed, max_steps=10**9, frame_rate=FRAME_RATE_HZ, accept_start_angle_deg=4,
+            )
         self.map_name = map_name
         self.dt_s = 1.0 / FRAME_RATE_HZ
         self._noise = np.random.default_rng(np.random.SeedSequence([seed, 20]))
