@@ -274,7 +274,8 @@ def cmd_duckietown_suite(args: argparse.Namespace) -> int:
     """The development maps guarded / unguarded / expert, obstacles, domain randomisation → suite.md, suite.json."""
     from fearguard.worlds.duckietown.suite import run_suite
 
-    table = run_suite(args.out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, on_run=print)
+    table = run_suite(args.out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds, jobs=args.jobs,
+                      on_run=print)
     print(table)
     print(f"wrote {args.out}/suite.md, suite.json")
     return 0
@@ -376,6 +377,8 @@ def build_parser() -> argparse.ArgumentParser:
     dts.add_argument("--seconds", type=float, default=60.0, help="duration of each drive (default 60)")
     dts.add_argument("--seeds", type=int, default=10, help="domain-randomised seeds (default 10)")
     dts.add_argument("--maps", nargs="*", default=None, help="lane maps (default: loop_empty small_loop zigzag_dists straight_road)")
+    dts.add_argument("--rand-seconds", type=float, default=None, help="duration of each randomised drive (default: --seconds)")
+    dts.add_argument("--jobs", type=int, default=1, help="drives at a time, each in its own process (default 1)")
     dts.set_defaults(func=cmd_duckietown_suite)
     return parser
 

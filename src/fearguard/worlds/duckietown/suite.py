@@ -10,7 +10,9 @@ criteria of issue 14 are checked at the end from the rows:
 from __future__ import annotations
 
 import json
+import multiprocessing
 from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -35,8 +37,9 @@ OBSTACLE_RUNS = (  # (name, map, obstacle, range sensor, controller): 1 m ahead 
 )
 
 
-def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None) -> list[tuple[str, DriveOptions]]:
-    """Every drive of the suite, experts first (the other rows are compared to them)."""
+def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None,
+         rand_seconds: float | None = None) -> list[tuple[str, DriveOptions]]:
+    """Every drive of the suite, experts first (the other rows are compared to them); randomised drives last ``rand_seconds``."""
     base = DriveOptions(seconds=seconds, plots=True)
     runs: list[tuple[str, DriveOptions]] = []
     for m in maps or LANE_MAPS:
@@ -46,7 +49,7 @@ def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None) -> list[
                                    seconds=min(seconds, OBSTACLE_SECONDS))))
     for seed in range(seeds):
         for c in ("expert", "guarded"):
-            options = replace(base, map_name=DOMAIN_RAND_MAP, domain_rand=True, seed=seed, controller=c)
+            options = replace(base, map_name=DOMAIN_RAND_MAP, domain_rand=True, seed=seed, controller=c, seconds=rand_seconds or seconds)
             runs.append((f"{DOMAIN_RAND_MAP} rand {seed}", options))
     return runs
 
@@ -104,27 +107,48 @@ def cost_line(rows: Sequence[dict[str, Any]]) -> str:
             f"step (physics + rendering): {sm:.1f} ms; fearguard = {100 * gm / sm:.0f} % of a simulator step")
 
 
+def _drive_summary(options: DriveOptions, folder: Path) -> dict[str, Any]:
+    """One drive of the suite (a top-level function, so a worker process can run it)."""
+    return drive(options, folder).summary
+
+
+def _folder(out: Path, name: str, options: DriveOptions) -> Path:
+    return out / f"{name.replace(' ', '_').replace(',', '').replace('+', 'with')}_{options.controller}_{options.range_sensor}"
+
+
 def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps: Sequence[str] | None = None,
-              on_run: Callable[[str], None] | None = None) -> str:
-    """Run the plan; each drive in its own folder; suite.md / suite.json rewritten after every drive. Returns the markdown."""
+              rand_seconds: float | None = None, jobs: int = 1, on_run: Callable[[str], None] | None = None) -> str:
+    """Run the plan (``jobs`` drives at a time, each in its own process); suite.md / suite.json rewritten after every drive.
+
+    Returns the markdown. Each drive writes its own folder (log, summary, plots).
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    rows: list[dict[str, Any]] = []
-    experts: dict[str, float] = {}
+    runs = plan(seconds, seeds, maps, rand_seconds)
+    summaries: dict[int, dict[str, Any]] = {}
     markdown = ""
-    for name, options in plan(seconds, seeds, maps):
-        folder = out / f"{name.replace(' ', '_').replace(',', '').replace('+', 'with')}_{options.controller}_{options.range_sensor}"
-        result = drive(options, folder)
-        if options.controller == "expert":
-            experts[name] = result.summary["progress_m"]
-        rows.append(_row(name, options, result.summary, experts))
+
+    def finished(i: int, summary: dict[str, Any]) -> None:
+        nonlocal markdown
+        summaries[i] = summary
+        experts = {runs[k][0]: summaries[k]["progress_m"] for k in summaries if runs[k][1].controller == "expert"}
+        rows = [_row(runs[k][0], runs[k][1], summaries[k], experts) for k in sorted(summaries)]
         checks = criteria(rows)
         markdown = suite_markdown(rows) + "\n" + cost_line(rows) + "\n\n" + "\n".join(
             f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"
         (out / "suite.md").write_text(markdown, encoding="utf-8")
         (out / "suite.json").write_text(json.dumps(json_value({"rows": rows, "criteria": checks}), indent=2) + "\n", encoding="utf-8")
         if on_run is not None:
-            r = rows[-1]
-            on_run(f"{name} {options.controller}: progress {r['progress_m']:.2f} m, departures {r['departures']}, "
-                   f"collisions {r['collisions']}, EMERGENCY {r['emergency_s']:.1f} s")
+            name, options = runs[i]
+            on_run(f"{name} {options.controller}: progress {summary['progress_m']:.2f} m, departures {summary['departures']}, "
+                   f"collisions {summary['collisions']}, EMERGENCY {summary['time_in_mode_s']['EMERGENCY']:.1f} s")
+
+    if jobs <= 1:
+        for i, (name, options) in enumerate(runs):
+            finished(i, _drive_summary(options, _folder(out, name, options)))
+        return markdown
+    with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = {pool.submit(_drive_summary, options, _folder(out, name, options)): i for i, (name, options) in enumerate(runs)}
+        for future in as_completed(futures):
+            finished(futures[future], future.result())
     return markdown
