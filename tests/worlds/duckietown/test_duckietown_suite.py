@@ -10,7 +10,7 @@ def test_plan_has_experts_before_the_runs_compared_to_them() -> None:
     runs = plan(60.0, 2, rand_seconds=30.0)
     names = [n for n, _ in runs]
     for m in LANE_MAPS:
-        assert names.index(m) == [i for i, (n, o) in enumerate(runs) if n == m and o.controller == "expert"][0]
+        assert names.index(m) == next(i for i, (n, o) in enumerate(runs) if n == m and o.controller == "expert")
     rand = [o for _, o in runs if o.domain_rand]
     assert len(rand) == 4 and {o.seconds for o in rand} == {30.0} and {o.seed for o in rand} == {0, 1}
     assert any(o.obstacle == "duck" and o.range_sensor == "none" and o.controller == "guarded" for _, o in runs)
