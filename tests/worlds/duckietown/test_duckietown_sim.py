@@ -111,3 +111,14 @@ def test_a_misspelt_map_gets_a_suggestion() -> None:
 
     with pytest.raises(MapError, match="did you mean loop_empty"):
         DuckietownWorld("loop_emtpy", width_px=160, height_px=120)
+
+
+def test_domain_randomisation_runs_and_changes_the_picture() -> None:
+    plain = DuckietownWorld("loop_empty", width_px=160, height_px=120, seed=1, noise_grey=0.0)
+    rand = DuckietownWorld("loop_empty", width_px=160, height_px=120, seed=1, noise_grey=0.0, domain_rand=True)
+    try:
+        assert np.abs(plain.frame_bgr().astype(float) - rand.frame_bgr().astype(float)).mean() > 5.0
+        assert not rand.step(curvature_action(0.2, 0.0)).invalid_pose
+    finally:
+        plain.close()
+        rand.close()

@@ -6,6 +6,8 @@ here takes three fixes, all applied at run time without editing installed files:
 - duckietown-world's PWM dynamics pass ``[array([v]), 0.0]`` to ``geometry.se2_from_linear_angular``,
   which numpy ≥ 1.24 rejects as a ragged array: a wrapper flattens the one-element arrays first.
 - ``gym_duckietown`` is imported before ``geometry`` (otherwise geometry wants the ``decorator`` package).
+- Domain randomisation draws the camera's height, angle and field of view as 1-element arrays, which
+  ``gluPerspective`` (ctypes) rejects: they are turned into numbers.
 
 Ground truth uses the simulator's own functions: ``get_lane_pos2`` (its ``dist`` and ``angle_deg`` are
 + to the RIGHT of the lane centre and direction, the opposite of its docstring; fearguard's heading
@@ -72,6 +74,7 @@ class Truth:
 
 
 _PATCHED = False
+_SCALAR_SETTINGS = ("camera_height", "camera_angle", "camera_fov_y")  # drawn as 1-element arrays; GL wants numbers
 
 
 def _simulator() -> Any:
@@ -98,6 +101,18 @@ def _simulator() -> Any:
             return original(flat, float(np.asarray(angular, dtype=float).reshape(-1)[0]))
 
         geometry.se2_from_linear_angular = se2_from_linear_angular
+        from gym_duckietown.randomization.randomizer import Randomizer
+
+        draw = Randomizer.randomize
+
+        def randomize(self: Any, rng: Any) -> dict:
+            settings = draw(self, rng)
+            for key in _SCALAR_SETTINGS:
+                if key in settings:
+                    settings[key] = float(np.asarray(settings[key], dtype=float).reshape(-1)[0])
+            return settings
+
+        Randomizer.randomize = randomize
         for name in ("gym-duckietown", "duckietown_world", "geometry", "commons", "typing", "nodes", "aido_schemas", "zuper_ipce"):
             logging.getLogger(name).setLevel(logging.ERROR)
         _PATCHED = True
