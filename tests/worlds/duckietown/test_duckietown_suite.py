@@ -36,4 +36,4 @@ def test_criteria_pass_and_fail_as_issue_14_says() -> None:
     assert [c["ok"] for c in checks] == [True, False, False, False, False]
     assert "loop_empty rand 1" in checks[-1]["detail"] and "79–82 %" in checks[-1]["detail"]
     table = suite_markdown(rows)
-    assert "stopped 0.10 m short, did not go on" in table and table.count("\n") == len(rows) + 2
+    assert "stopped 0.10 m short (no supervisor), did not go on" in table and table.count("\n") == len(rows) + 2

@@ -178,7 +178,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
                 guard_ms.append(1e3 * (mid - began))
             samples.append(Sample(truth.t_s, truth.speed_mps, truth.lane_offset_m, truth.progress_m, truth.invalid_pose, truth.collided,
                                   truth.obstacle_gap_m, present, cmd.mode.name if cmd else None, cmd.strategy.name if cmd else None,
-                                  cmd.fear if cmd else None))
+                                  cmd.fear if cmd else None, _cause(cmd)))
             fields = dict(
                 controller=o.controller, speed_target_mps=speed, applied_steering_deg=steering,
                 vel=action.vel, omega=action.omega, yaw_rate_rps=action.yaw_rate_rps, speed_mps=truth.speed_mps,
@@ -220,6 +220,12 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
         recorder.plot_timeline(title, with_speed=True)
         plot_drive(records, out / "drive.png", title)
     return DriveResult(summary, out, interrupted)
+
+
+def _cause(cmd: Command | None) -> str | None:
+    if cmd is None:
+        return None
+    return cmd.cause.value if cmd.cause is not None else "fault"
 
 
 def _timing(guard_ms: list[float], sim_ms: list[float]) -> dict[str, Any]:

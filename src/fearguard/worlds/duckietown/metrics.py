@@ -49,6 +49,7 @@ class Sample:
     mode: str | None = None
     strategy: str | None = None
     fear: float | None = None
+    cause: str | None = None  # the command's dominant cause ("collision", "road", ...; "fault")
 
 
 def on_marking(offset_m: float) -> bool:
@@ -139,6 +140,7 @@ def _obstacle_summary(samples: Sequence[Sample], gaps: Sequence[float]) -> dict[
         "stopped_before_contact": stopped is not None and not touched,
         "stop_gap_m": stopped.obstacle_gap_m if stopped is not None and math.isfinite(stopped.obstacle_gap_m) else None,
         "stop_t_s": stopped.t_s if stopped is not None else None,
+        "stop_cause": stopped.cause if stopped is not None else None,  # why it stood: "collision" (saw it), "road", ...
         "removed_t_s": removed_at.t_s if removed_at is not None else None,
         "progress_after_removal_m": after,
         "went_on": after is not None and after >= RESUMED_PROGRESS_M,

@@ -50,14 +50,24 @@ SUITE_COLUMNS = ("run", "controller", "progress m", "% of expert", "departures",
                  "EMERGENCY s", "offset RMS m", "on marking %", "obstacle")
 
 
+def _obstacle_cell(ob: Mapping[str, Any] | None) -> str:
+    """What happened at the obstacle: stopped how far short and why (the command's cause), contact, went on."""
+    if not ob:
+        return "–"
+    if ob["stopped_before_contact"]:
+        what = f"stopped {_f(ob.get('stop_gap_m'))} m short ({ob.get('stop_cause') or 'no supervisor'})"
+    else:
+        what = "contact" if ob["contact"] else "did not stop"
+    if ob["went_on"]:
+        return what + ", went on"
+    return what + (", did not go on" if ob.get("removed_t_s") is not None else "")
+
+
 def suite_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
     """The suite's table: one row per drive (guarded / unguarded / expert per map, then obstacles and seeds)."""
     out = ["| " + " | ".join(SUITE_COLUMNS) + " |", "|" + "---|" * len(SUITE_COLUMNS)]
     for r in rows:
-        ob = r.get("obstacle")
-        obstacle = "–" if not ob else (("stopped " + _f(ob.get("stop_gap_m"), ".2f") + " m short" if ob["stopped_before_contact"] else
-                                        ("contact" if ob["contact"] else "did not stop"))
-                                       + (", went on" if ob["went_on"] else ", did not go on" if ob.get("removed_t_s") is not None else ""))
+        obstacle = _obstacle_cell(r.get("obstacle"))
         cells = [r["run"], r["controller"], _f(r["progress_m"]), _f(r.get("progress_vs_expert_pct"), ".0f"), str(r["departures"]),
                  str(r["centre_line_crossings"]), str(r["collisions"]), "yes" if r["invalid_pose"] else "no",
                  _f(r.get("emergency_s"), ".1f") if r["controller"] == "guarded" else "–", _f(r.get("lane_offset_rms_m"), ".3f"),
