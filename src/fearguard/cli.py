@@ -1,4 +1,4 @@
-"""Command line: ``fearguard demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``suite``, ``verify``, ``duckietown``.
+"""Command line: ``demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``suite``, ``verify``, ``duckietown``.
 
 A thin layer: it parses arguments, calls the library, prints, and maps errors to exit codes
 (0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr).
