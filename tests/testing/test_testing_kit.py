@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 import fearguard as fg
 from fearguard.cli import main
 from fearguard.cues import CUE_NAMES
-from fearguard.testing import Case, FrameSpec, Step, Subject, histories, load_case, save_case, unknown_values
+from fearguard.testing import INVARIANTS, Case, FrameSpec, Step, Subject, histories, load_case, save_case, unknown_values
 from fearguard.testing.frames import frame_pixels
 from fearguard.testing.history import step_record
 from fearguard.testing.subject import run
@@ -157,9 +157,10 @@ def test_the_three_line_user_test_runs_in_a_fresh_folder(tmp_path) -> None:
         MY_CAR = fg.VehicleLimits(max_speed_mps=1.5)
 
         from fearguard.testing import supervisor_invariants
-        test_my_car = supervisor_invariants(rules="rules/my_car.toml", vehicle=MY_CAR, steer=my_pilot, examples=5)
+        test_my_car = supervisor_invariants(rules="rules/my_car.toml", vehicle=MY_CAR, steer=my_pilot, examples=3)
         """))
     done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rs", "test_my_car.py"], cwd=tmp_path,
                           capture_output=True, text=True, env=_env(), timeout=600)
     assert done.returncode == 0, done.stdout + done.stderr
-    assert "9 passed, 1 skipped" in done.stdout, done.stdout
+    pending = sum(1 for inv in INVARIANTS if inv.pending)
+    assert f"{len(INVARIANTS) - pending} passed" in done.stdout and (f"{pending} skipped" in done.stdout or not pending), done.stdout

@@ -13,7 +13,7 @@ File format (``save_case`` / ``load_case``), one JSON object per line:
 
 Every step line holds ``log.jsonl``'s names (DESIGN.md: ``frame``, ``t_s``, the five cues, ``fear``,
 ``fear_level``, ``mode``, ``strategy``, ``speed_limit_mps``, ``steering_deg``, ``reasons``) and the
-observation's fields (``speed_mps``, ``ultrasonic_range_m``, ``ultrasonic_echo_s``, ``odometer_m``,
+observation's fields (``speed_mps``, ``ultrasonic_range_m``, ``ultrasonic_echo_s``, ``odometer_m``, ``range_rate_mps``,
 ``qr_payload``, ``lead_bearing_deg``/``lead_range_m`` or ``lead_box_px``, ``frame_spec``). The cue fields
 are the cues *given* to the supervisor (absent: perception measured them). As in ``log.jsonl``, a NaN cue
 is ``null`` and ±infinity is ``"inf"``/``"-inf"``; values a JSON number cannot carry (a string where a
@@ -37,7 +37,7 @@ from fearguard.cues import CUE_NAMES
 from fearguard.errors import FearguardError
 
 FORMAT_VERSION = 1
-OBSERVATION_NUMBERS = ("t_s", "speed_mps", "ultrasonic_range_m", "ultrasonic_echo_s", "odometer_m")
+OBSERVATION_NUMBERS = ("t_s", "speed_mps", "ultrasonic_range_m", "ultrasonic_echo_s", "odometer_m", "range_rate_mps")
 COMMAND_FIELDS = ("fear", "fear_level", "mode", "strategy", "speed_limit_mps", "steering_deg", "reasons")
 
 
@@ -93,6 +93,7 @@ class Step:
     frame: FrameSpec | None = None
     ultrasonic_range_m: Any = None
     ultrasonic_echo_s: Any = None
+    range_rate_mps: Any = None  # the obstacle range's rate (m/s, − = approaching) when the caller knows it (radar)
     odometer_m: Any = None
     qr_payload: Any = None
     lead: Any = None  # fg.Lead, fg.LeadBox or None
@@ -229,6 +230,7 @@ def step_from_record(rec: Mapping[str, Any]) -> Step:
     return Step(
         t_s=numbers["t_s"], speed_mps=numbers["speed_mps"], cues=cues, frame=frame,
         ultrasonic_range_m=numbers["ultrasonic_range_m"], ultrasonic_echo_s=numbers["ultrasonic_echo_s"],
+        range_rate_mps=numbers["range_rate_mps"],
         odometer_m=numbers["odometer_m"], qr_payload=decode(qr, text=True), lead=lead, steer_output=decode(rec.get("steer_output", 0.0)),
     )
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -24,8 +24,9 @@ import fearguard as fg
 from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens, finite_number
 from fearguard.testing import strategies as fs
 from fearguard.testing.history import Case, FrameSpec, SteerRaises, Step
-from fearguard.testing.subject import NOT_CALLED, Driver, Run, Subject, run
+from fearguard.testing.subject import HAS_RANGE_RATE, NOT_CALLED, Driver, Run, Subject, run
 
+POLICY_FIELDS = frozenset(f.name for f in fields(fg.PolicyConfig))
 TOL = 1e-9  # [m/s], [-] rounding allowed in comparisons of speeds and fears
 FEAR_TOL = 1e-12  # [-] the vector path sums in another order than the scalar path
 VISION_CUES = ("lane_confidence", "brightness", "occlusion")
@@ -84,6 +85,11 @@ def _used_range_m(cmd: fg.Command) -> float:
     return d if isinstance(d, float) and d >= 0.0 else 0.0
 
 
+def _stopped(cmd: fg.Command) -> bool:
+    """EMERGENCY STOP with a zero limit: how a fault must be answered."""
+    return cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
+
+
 def _is_fault(cmd: fg.Command) -> bool:
     """A fault command (time, steering function, malformed input) has no dominant cause."""
     return cmd.cause is None and cmd.mode is fg.Mode.EMERGENCY
@@ -102,14 +108,14 @@ def _steer_fault(answer: Any, vehicle: fg.VehicleLimits) -> str | None:
     return None
 
 
-def _first_bad_frame(subject: Subject, case: Case, judge: Callable[[fg.Command], str | None]) -> str | None:
+def _first_bad_frame(subject: Subject, case: Case, judge: Callable[[Step, fg.Command], str | None]) -> str | None:
     """Run every history of the case; the first frame whose command the judge objects to, as "frame i: why"."""
     for _, history in case.runs:
         r = run(subject, history)
         if r.raised:
             return _broken(r)
-        for i, cmd in enumerate(r.commands):
-            why = judge(cmd)
+        for i, (step, cmd) in enumerate(zip(history, r.commands, strict=True)):
+            why = judge(step, cmd)
             if why:
                 return f"frame {i}: {why}"
     return None
@@ -120,7 +126,7 @@ def check_limits_in_range(subject: Subject, case: Case) -> str | None:
     """0 ≤ speed limit ≤ max speed; fear in [0, 1]; steering finite within ±max steering; a reason every frame."""
     car = subject.vehicle
 
-    def judge(cmd: fg.Command) -> str | None:
+    def judge(step: Step, cmd: fg.Command) -> str | None:
         v, f, s = cmd.speed_limit_mps, cmd.fear, cmd.steering_deg
         if not (isinstance(v, float) and 0.0 <= v <= car.max_speed_mps):
             return f"speed limit {v!r} outside [0, {car.max_speed_mps:g}] m/s"
@@ -143,26 +149,39 @@ def stopping_distance_m(v: float, car: fg.VehicleLimits) -> float:
     return v * car.reaction_time_s + v * v / (2.0 * car.max_decel_mps2)
 
 
+def lead_speed_mps(step: Step, cmd: fg.Command) -> float:
+    """Speed of the object ahead the supervisor assumed: ego speed − its closing speed (≥ 0); unknown: 0 (standing)."""
+    closing, speed = getattr(cmd, "closing_speed_mps", math.nan), finite_number(step.speed_mps)
+    if speed is None or not isinstance(closing, float) or not math.isfinite(closing):
+        return 0.0
+    return max(0.0, speed - closing)
+
+
 def check_safe_distance(subject: Subject, case: Case) -> str | None:
-    """For the obstacle range d the supervisor used: v·t_r + v²/(2a) ≤ max(0, d − margin) at v = the speed limit.
+    """For the obstacle range d the supervisor used, at v = the speed limit (responsibility-sensitive safety):
+    v·t_r + v²/(2a) ≤ max(0, d − margin + v_f²/(2b)), v_f the speed of the object ahead as the supervisor
+    estimated it (its ``closing_speed_mps``; 0 = a standing obstacle), b its assumed hardest braking.
 
     With a range sensor, "nothing in range" (inf) means the nearest obstacle may stand just beyond the
     sensor's maximum range: the car must be able to stop within what it can see.
     """
     car = subject.vehicle
+    b = getattr(car, "lead_max_decel_mps2", None)
 
-    def judge(cmd: fg.Command) -> str | None:
-        d, seen = _used_range_m(cmd), "obstacle at"
+    def judge(step: Step, cmd: fg.Command) -> str | None:
+        d, seen, v_f = _used_range_m(cmd), "obstacle at", lead_speed_mps(step, cmd) if b else 0.0
         if math.isinf(d):
             if not car.has_ultrasonic:
                 return None  # no range sensor: nothing is known in range (declared, not faked)
-            d, seen = car.ultrasonic_max_range_m, "nothing in range: an obstacle may stand just beyond the sensor's maximum range"
+            d, seen, v_f = car.ultrasonic_max_range_m, "nothing in range: an obstacle may stand just beyond the sensor's maximum range", 0.0
         v = cmd.speed_limit_mps
-        need, room = stopping_distance_m(v, car), max(0.0, d - car.stop_margin_m)
+        need = stopping_distance_m(v, car)
+        room = max(0.0, d - car.stop_margin_m + (v_f * v_f / (2.0 * b) if b and v_f > 0.0 else 0.0))
         if need > room + TOL:
+            ahead = f", the object ahead moving at {v_f:.4g} m/s and braking at most {b:g} m/s²" if v_f > 0.0 else ""
             return (f"speed limit {v:.4g} m/s needs {need:.4g} m to stop (reaction {car.reaction_time_s:g} s, "
                     f"braking {car.max_decel_mps2:g} m/s²) but there are {room:.4g} m ({seen} {d:.4g} m, margin "
-                    f"{car.stop_margin_m:g} m); {_cmd_text(cmd)}")
+                    f"{car.stop_margin_m:g} m{ahead}); {_cmd_text(cmd)}")
         return None
 
     return _first_bad_frame(subject, case, judge)
@@ -211,12 +230,18 @@ def worse(cues: fg.Cues, name: str, amount: float, rules: fg.RuleBase, vehicle: 
 
 
 def check_monotone(subject: Subject, case: Case) -> str | None:
-    """A cue getting worse on the last frame never lowers fear nor raises the speed limit."""
+    """A cue getting worse on the last frame never lowers fear nor raises the speed limit; nor does a faster
+    closing speed (the obstacle's range rate, when the caller gives it)."""
     r_better, r_worse = run(subject, case.run("better")), run(subject, case.run("worse"))
     for r in (r_better, r_worse):
         if r.raised:
             return _broken(r)
     b, w = r_better.commands[-1], r_worse.commands[-1]
+    if case.params.get("kind") == "closing":
+        if w.speed_limit_mps > b.speed_limit_mps + FEAR_TOL:
+            return (f"the obstacle closes faster on the last frame (range rate {case.params.get('from')} → {case.params.get('to')} m/s): "
+                    f"the speed limit rises {b.speed_limit_mps:.6g} → {w.speed_limit_mps:.6g} m/s ({_cmd_text(b)} → {_cmd_text(w)})")
+        return None
     what = f"{case.params.get('cue')} worsens {case.params.get('from')} → {case.params.get('to')} on the last frame"
     cb, cw = case.run("better")[-1].cues, case.run("worse")[-1].cues
     assert cb is not None and cw is not None
@@ -297,7 +322,20 @@ def _monotone_cases(subject: Subject) -> st.SearchStrategy[Case]:
         return Case((("better", (*prefix, replace(tail, cues=last))), ("worse", (*prefix, replace(tail, cues=w)))),
                     note=f"{name} worse on the last frame", params=params)
 
-    return pair()
+    rates, faster = st.floats(-2.0 * car.max_speed_mps, car.max_speed_mps), st.floats(0.0, 2.0 * car.max_speed_mps)
+    ranges = fs.valid_values("obstacle_range_m", rb, car)
+
+    @st.composite
+    def closing(draw: Any) -> Case:  # the same drive; on the last frame the obstacle approaches faster
+        prefix, last, rate, more = draw(prefixes), draw(hazard_or_valid), draw(rates), draw(faster)
+        last = replace(last, obstacle_range_m=draw(ranges))
+        t_last = max([_t(s) or 0.0 for s in prefix]) + draw(gaps)
+        tail = Step(t_s=t_last, speed_mps=draw(speeds), cues=last, lead=draw(leads), steer_output=draw(steer), frame=prefix[-1].frame)
+        params = {"kind": "closing", "from": rate, "to": rate - more}
+        runs = (("better", (*prefix, replace(tail, range_rate_mps=rate))), ("worse", (*prefix, replace(tail, range_rate_mps=rate - more))))
+        return Case(runs, note="the obstacle closes faster on the last frame", params=params)
+
+    return st.one_of(pair(), pair(), closing()) if HAS_RANGE_RATE else pair()
 
 
 def _num(v: float) -> float | str:
@@ -343,10 +381,10 @@ def check_unknown_is_worst(subject: Subject, case: Case) -> str | None:
         if r.raised:
             return _broken(r)
     b = r_bad.commands[-1]
-    matches = [r.commands[-1] for r in r_worst if r.commands[-1].fear == expected]
-    if not matches or not any(b.fear == m.fear and b.speed_limit_mps == m.speed_limit_mps and b.mode is m.mode for m in matches):
-        best = matches[0] if matches else r_worst[0].commands[-1]
-        return f"{name} = {getattr(bad_cues, name)!r} on the last frame: {_cmd_text(b)}; with its worst value: {_cmd_text(best)}"
+    worst_fear = max(r.commands[-1].fear for r in r_worst)  # the supervisor's (an absent sensor's cue is neutral in both)
+    matches = [r.commands[-1] for r in r_worst if r.commands[-1].fear == worst_fear]
+    if not any(b.fear == m.fear and b.speed_limit_mps == m.speed_limit_mps and b.mode is m.mode for m in matches):
+        return f"{name} = {getattr(bad_cues, name)!r} on the last frame: {_cmd_text(b)}; with its worst value: {_cmd_text(matches[0])}"
     return None
 
 
@@ -458,21 +496,50 @@ def check_rate_limits(subject: Subject, case: Case) -> str | None:
 
 
 # -- 7. pass-through ------------------------------------------------------------------------------
+RATE_WORDS = ("rate", "limit")  # a reason naming the physical limit that changed the steering
+
+
 def check_pass_through(subject: Subject, case: Case) -> str | None:
-    """At very low fear in NORMAL the wrapped steering angle is returned unchanged (PASS_THROUGH); a steady
-    drive through the calmest picture does reach very low fear in NORMAL (else the check would be vacuous)."""
+    """At very low fear in NORMAL the wrapped steering angle is returned unchanged (PASS_THROUGH), unless the
+    steering-rate limit binds: then the change is the smallest that respects it (the angle moved exactly
+    max_steering_rate_dps × dt toward it), with a reason. A steady drive through the calmest picture does
+    reach very low fear in NORMAL (else the check would be vacuous)."""
     history = case.run("drive")
     r = run(subject, history)
     if r.raised:
         return _broken(r)
-    for i, (cmd, raw) in enumerate(zip(r.commands, r.steering_in, strict=True)):
+    rate = getattr(subject.vehicle, "max_steering_rate_dps", None)
+    last_t: float | None = None
+    for i, (step, cmd, raw) in enumerate(zip(history, r.commands, r.steering_in, strict=True)):
+        t = _t(step)
         if cmd.mode is fg.Mode.NORMAL and cmd.fear_level is fg.FearLevel.VERY_LOW:
-            if cmd.strategy is not fg.Strategy.PASS_THROUGH or finite_number(raw) != cmd.steering_deg:
+            wanted = finite_number(raw)
+            if cmd.strategy is not fg.Strategy.PASS_THROUGH or wanted is None:
                 return f"frame {i}: NORMAL at VERY_LOW fear, the steering function said {raw!r} deg but the command is {_cmd_text(cmd)}"
+            if cmd.steering_deg != wanted:
+                prev = r.commands[i - 1].steering_deg if i else None
+                why = _rate_limited(wanted, cmd, prev, None if t is None or last_t is None else t - last_t, rate)
+                if why:
+                    return f"frame {i}: NORMAL at VERY_LOW fear, the steering function said {wanted!r} deg: {why}; {_cmd_text(cmd)}"
+        last_t = t if t is not None else last_t
     if case.params.get("kind") == "steady_calm" and not any(
             c.mode is fg.Mode.NORMAL and c.fear_level is fg.FearLevel.VERY_LOW for c in r.commands):
         return (f"the calmest picture ({fs.best_cues(subject.rules)}) for {len(r.commands)} frames never gives NORMAL at VERY_LOW fear: "
                 f"the steering is never passed through; last: {_cmd_text(r.commands[-1])}")
+    return None
+
+
+def _rate_limited(wanted: float, cmd: fg.Command, prev: float | None, dt: float | None, rate: float | None) -> str | None:
+    """Why a changed steering angle is not the smallest change the rate limit allows (None: it is)."""
+    if rate is None or prev is None or dt is None:
+        return "the angle was changed although no steering-rate limit can bind"
+    step = rate * max(dt, 0.0)
+    smallest = min(max(wanted, prev - step), prev + step)
+    if abs(cmd.steering_deg - smallest) > TOL:
+        return (f"the rate limit ({rate:g} deg/s × {dt:.4g} s from {prev:+.4g} deg) allows {smallest:+.6g} deg, "
+                f"the command is {cmd.steering_deg:+.6g} deg")
+    if not any(w in reason.lower() for reason in cmd.reasons for w in RATE_WORDS):
+        return "the rate limit changed the angle but no reason says so"
     return None
 
 
@@ -516,6 +583,7 @@ def check_deterministic(subject: Subject, case: Case) -> str | None:
 
 # -- 9. liveness of the recovery ------------------------------------------------------------------
 RECOVERY_WAIT_S = 60.0  # [s] standing still in a road-picture emergency: the creep must have come by then
+RECOVERY_KEYS = ("recovery_dwell_s", "recovery_creep_s", "recovery_max_creeps")  # [policy] numbers of the recovery (issue 10)
 
 
 def check_recovery_is_live(subject: Subject, case: Case) -> str | None:
@@ -531,7 +599,28 @@ def check_recovery_is_live(subject: Subject, case: Case) -> str | None:
         return f"the road picture is lost, range clear, car standing: still {_cmd_text(r.commands[-1])} after {history[-1].t_s:.4g} s"
     if kind in ("obstacle", "fault") and creeps:
         return f"frame {creeps[0]}: a creep ({_cmd_text(r.commands[creeps[0]])}) although {case.note}"
+    cfg = subject.rules.policy
+    episodes = _runs_of(creeps)
+    most, longest_s = getattr(cfg, "recovery_max_creeps", None), getattr(cfg, "recovery_creep_s", None)
+    if most is not None and len(episodes) > most:
+        return f"{len(episodes)} creeps in one EMERGENCY, more than recovery_max_creeps = {most}"
+    dt = float(case.params.get("dt", 0.0))
+    for a, b in episodes:
+        lasted = float(history[b].t_s) - float(history[a].t_s)
+        if longest_s is not None and lasted > longest_s + dt + TOL:
+            return f"frames {a}-{b}: a creep of {lasted:.4g} s, longer than recovery_creep_s = {longest_s:g} s"
     return None
+
+
+def _runs_of(indices: Sequence[int]) -> list[tuple[int, int]]:
+    """Consecutive runs in a sorted list of frame indices, as (first, last)."""
+    runs: list[tuple[int, int]] = []
+    for i in indices:
+        if runs and i == runs[-1][1] + 1:
+            runs[-1] = (runs[-1][0], i)
+        else:
+            runs.append((i, i))
+    return runs
 
 
 def _recovery_cases(subject: Subject) -> st.SearchStrategy[Case]:
@@ -552,7 +641,7 @@ def _recovery_cases(subject: Subject) -> st.SearchStrategy[Case]:
                  for k in range(n)]
         note = {"road_lost": "the road picture is lost", "obstacle": "an obstacle is in range",
                 "fault": "the steering function faulted"}[kind]
-        return Case.drive(steps, note=note, kind=kind)
+        return Case.drive(steps, note=note, kind=kind, dt=dt)
 
     return standstill()
 
@@ -576,7 +665,7 @@ def check_watchdog(subject: Subject, case: Case) -> str | None:
                 why = f"time did not increase ({last_t:.4g} s → {t:.4g} s)"
             else:
                 why = _steer_fault(raw, car)
-            if why and not (cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0):
+            if why and not _stopped(cmd):
                 return f"frame {i}: {why}, but the command is {_cmd_text(cmd)}"
             if t is not None:
                 last_t = t
@@ -587,13 +676,61 @@ def _watchdog_cases(subject: Subject) -> st.SearchStrategy[Case]:
     return _drives(subject, max_size=25)
 
 
+WATCHDOG_KEYS = ("watchdog_frames", "watchdog_age_s")  # [policy] numbers of the stall watchdog (issue 10)
+
+
+def check_stall(subject: Subject, case: Case) -> str | None:
+    """A frame later than the watchdog allows — max(watchdog_frames × the frame period, watchdog_age_s) — is a
+    fault for that frame: EMERGENCY/STOP with a zero limit. Checked where it must hold whatever period the
+    supervisor measured: a gap longer than watchdog_age_s and watchdog_frames × every earlier gap."""
+    cfg = subject.rules.policy
+    frames_n, age_s = (getattr(cfg, k, None) for k in WATCHDOG_KEYS)
+    if frames_n is None or age_s is None:
+        frames_n, age_s = 10, 1.0  # DESIGN.md / openpilot: a message older than max(10 periods, 1 s)
+    for _, history in case.runs:
+        r = run(subject, history)
+        if r.raised:
+            return _broken(r)
+        last_t: float | None = None
+        gaps: list[float] = []
+        for i, (step, cmd) in enumerate(zip(history, r.commands, strict=True)):
+            t = _t(step)
+            if t is None:
+                continue
+            if last_t is not None and t > last_t:
+                gap = t - last_t
+                allowed = max(age_s, frames_n * max(gaps)) if gaps else age_s
+                if gap > allowed + TOL and not _stopped(cmd):
+                    return (f"frame {i}: the input stalled {gap:.4g} s (the watchdog allows {allowed:.4g} s), "
+                            f"but the command is {_cmd_text(cmd)}")
+                gaps.append(gap)
+            last_t = t
+    return None
+
+
+def _stall_cases(subject: Subject) -> st.SearchStrategy[Case]:
+    rb, car = subject.rules, subject.vehicle
+    calm = fs.calm_cues(rb, car)
+    periods, stalls, counts = st.sampled_from([0.02, 0.05, 0.1, 0.2]), st.floats(1.0, 6.0), st.integers(2, 25)
+
+    @st.composite
+    def steady_then_stall(draw: Any) -> Case:  # a steady drive, one late frame, then the steady drive again
+        dt, n, gap = draw(periods), draw(counts), draw(stalls)
+        times = [k * dt for k in range(n)] + [(n - 1) * dt + gap + k * dt for k in range(3)]
+        return Case.drive((Step(t_s=t, speed_mps=car.max_speed_mps / 2, cues=draw(calm)) for t in times),
+                          note=f"{n} frames every {dt:g} s, then one {gap:.3g} s late")
+
+    return st.one_of(steady_then_stall(), steady_then_stall(), _drives(subject, max_size=25, frame_level=False))
+
+
 INVARIANTS: tuple[Invariant, ...] = (
     Invariant("1", "limits_in_range", "limits in range",
               "0 ≤ speed_limit_mps ≤ max_speed_mps; fear in [0, 1]; steering within ±max_steering_deg",
               lambda s: _drives(s), check_limits_in_range, prefix_closed=True),
     Invariant("2", "safe_distance", "safe distance", "v·t_r + v²/(2·a) ≤ max(0, d − margin) for v = the speed limit",
               _safe_distance_cases, check_safe_distance, prefix_closed=True),
-    Invariant("3", "monotone", "monotone in each cue", "a cue getting worse never lowers fear nor raises the speed limit",
+    Invariant("3", "monotone", "monotone in each cue" + (" and closing speed" if HAS_RANGE_RATE else ""),
+              "a cue getting worse never lowers fear nor raises the speed limit; a faster closing speed never raises it",
               _monotone_cases, check_monotone),
     Invariant("4", "unknown_is_worst", "unknown = worst",
               "a NaN cue gives exactly the fear of that cue's worst value; no rule firing = fear 1",
@@ -609,9 +746,14 @@ INVARIANTS: tuple[Invariant, ...] = (
     Invariant("9", "recovery_is_live", "liveness of the recovery",
               "a road-picture emergency (range clear, no fault) is followed by a bounded creep, not a stop for good",
               _recovery_cases, check_recovery_is_live,
-              pending="the recovery creep (issue 10) is not in this fearguard: a road-picture stop is forever"),
+              pending="" if all(k in POLICY_FIELDS for k in RECOVERY_KEYS) else
+              "the recovery creep (issue 10) is not in this fearguard: a road-picture stop is forever"),
     Invariant("10", "watchdog", "stale input is a fault", "time not increasing, a failed steering function: EMERGENCY/STOP at once",
               _watchdog_cases, check_watchdog, prefix_closed=True),
+    Invariant("10", "stall", "a stall is a fault", "a frame later than the watchdog allows gives EMERGENCY/STOP",
+              _stall_cases, check_stall, prefix_closed=True,
+              pending="" if all(k in POLICY_FIELDS for k in WATCHDOG_KEYS) else
+              "the timing watchdog (issue 10) is not in this fearguard: a frame 2 s late is answered as usual"),
 )
 
 

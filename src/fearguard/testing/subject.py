@@ -158,10 +158,16 @@ class Run:
     raised: str | None = None  # step() raised: the supervisor broke its contract
 
 
+OBSERVATION_FIELDS = frozenset(f.name for f in fields(fg.Observation))
+HAS_RANGE_RATE = "range_rate_mps" in OBSERVATION_FIELDS  # a caller-known closing speed (radar, simulator)
+
+
 def observation(step: Step, frame: Any) -> fg.Observation:
+    """The Observation a step describes (a range rate only where this fearguard's Observation has the field)."""
+    extra = {"range_rate_mps": step.range_rate_mps} if HAS_RANGE_RATE and step.range_rate_mps is not None else {}
     return fg.Observation(
         t_s=step.t_s, speed_mps=step.speed_mps, frame=frame, cues=step.cues, ultrasonic_range_m=step.ultrasonic_range_m,
-        odometer_m=step.odometer_m, qr_payload=step.qr_payload, lead=step.lead, ultrasonic_echo_s=step.ultrasonic_echo_s,
+        odometer_m=step.odometer_m, qr_payload=step.qr_payload, lead=step.lead, ultrasonic_echo_s=step.ultrasonic_echo_s, **extra,
     )
 
 
