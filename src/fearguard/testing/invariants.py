@@ -12,6 +12,7 @@ its checker is written against DESIGN.md's contract and is reported as skipped, 
 
 from __future__ import annotations
 
+import importlib
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields, replace
@@ -723,6 +724,98 @@ def _stall_cases(subject: Subject) -> st.SearchStrategy[Case]:
     return st.one_of(steady_then_stall(), steady_then_stall(), _drives(subject, max_size=25, frame_level=False))
 
 
+def _vision(cmd: fg.Command) -> tuple[float, ...]:
+    """The picture's cues of a command, NaN made comparable."""
+    return tuple(-1.0 if not isinstance(v, float) or math.isnan(v) else v for v in (getattr(cmd.cues, n) for n in VISION_CUES))
+
+
+def check_refilled_buffer(subject: Subject, case: Case) -> str | None:
+    """One buffer refilled with new pixels every frame (as camera drivers do) is analysed afresh: the
+    commands are those of the same pixels in new arrays (an identity cache would repeat the first frame)."""
+    history = case.run("drive")
+    fresh = tuple(replace(s, frame=replace(s.frame, reuse_buffer=False)) if s.frame is not None else s for s in history)
+    a, b = run(subject, history), run(subject, fresh)
+    for r in (a, b):
+        if r.raised:
+            return _broken(r)
+    for i, (x, y) in enumerate(zip(a.commands, b.commands, strict=True)):
+        if _vision(x) != _vision(y) or x.speed_limit_mps != y.speed_limit_mps or x.mode is not y.mode:
+            return (f"frame {i}: the pixels arrive in the previous frame's buffer and the answer differs from the same pixels in a "
+                    f"new array: cues {_vision(x)} vs {_vision(y)}; {_cmd_text(x)} vs {_cmd_text(y)}")
+    return None
+
+
+def _refill_cases(subject: Subject) -> st.SearchStrategy[Case]:
+    kinds = st.sampled_from(["render", "synthetic"])
+    renders = st.builds(FrameSpec, kind=st.just("render"), source=st.sampled_from(fs.RENDER_SCENARIOS),
+                        index=st.integers(0, fs.RENDER_POOL - 1), effect=st.sampled_from(fs.EFFECTS))
+    synthetic = st.builds(FrameSpec, kind=st.just("synthetic"), index=st.integers(0, 20), effect=st.sampled_from(fs.EFFECTS),
+                          offset_px=st.floats(-40.0, 40.0))
+    counts, speeds = st.integers(2, 8), fs.speeds(subject.vehicle, unknown=False)
+
+    @st.composite
+    def refilled(draw: Any) -> Case:
+        specs = renders if draw(kinds) == "render" else synthetic
+        n = draw(counts)
+        frames = [draw(specs) for _ in range(n)]
+        steps = [Step(t_s=0.05 * k, speed_mps=draw(speeds), frame=replace(f, reuse_buffer=k > 0)) for k, f in enumerate(frames)]
+        return Case.drive(steps, note="one buffer refilled with each new frame")
+
+    return refilled()
+
+
+# one owner for the frame pipeline, no identity cache (issue 9); its mark is the Command carrying its perception
+HAS_PIPELINE_OWNER = any(f.name == "perceived" for f in fields(fg.Command))
+HAS_FROZEN_S = hasattr(importlib.import_module("fearguard.perception"), "FROZEN_S")  # frozen judged in seconds (issue 10)
+
+
+def check_repeated_frames(subject: Subject, case: Case) -> str | None:
+    """The same frame content again within a short window (a loop faster than its camera) is "no new frame":
+    no "frozen" reason and the same picture cues as when it was new; content identical for longer than the
+    frozen threshold (perception.FROZEN_S) is a frozen camera: its picture cues are unknown."""
+    frozen_s = getattr(importlib.import_module("fearguard.perception"), "FROZEN_S", math.inf)
+    history = case.run("drive")
+    r = run(subject, history)
+    if r.raised:
+        return _broken(r)
+    first: dict[Any, tuple[int, float]] = {}
+    for i, (step, cmd) in enumerate(zip(history, r.commands, strict=True)):
+        key = step.frame
+        if i == 0 or key != history[i - 1].frame:
+            first = {key: (i, float(step.t_s))}
+            continue
+        k, since = first[key]
+        same_s = float(step.t_s) - since
+        frozen = any("frozen" in reason for reason in cmd.reasons)
+        if same_s <= 0.5 * frozen_s and (frozen or _vision(cmd) != _vision(r.commands[k])):
+            return (f"frame {i}: the frame of frame {k} again after {same_s:.3g} s (a loop faster than its camera; frozen means "
+                    f"over {frozen_s:g} s): {'a frozen camera' if frozen else 'other picture cues'} — cues {_vision(cmd)} vs "
+                    f"{_vision(r.commands[k])}")
+        if same_s > 1.5 * frozen_s and _vision(cmd) != (-1.0, -1.0, -1.0):
+            return (f"frame {i}: the same pixels for {same_s:.3g} s (over {frozen_s:g} s: a frozen camera) but the picture cues "
+                    f"are known: {_vision(cmd)}")
+    return None
+
+
+def _repeat_cases(subject: Subject) -> st.SearchStrategy[Case]:
+    frames = fs.frame_specs(garbage=False)
+    repeats, periods, speeds = st.integers(1, 4), st.sampled_from([0.02, 0.05]), fs.speeds(subject.vehicle, unknown=False)
+    stuck = st.integers(0, 1)
+
+    @st.composite
+    def camera_slower_than_loop(draw: Any) -> Case:  # e.g. a 5 fps camera read by a 20 Hz loop; once maybe a frozen camera
+        dt, n_frames = draw(periods), draw(st.integers(1, 4))
+        steps: list[Step] = []
+        for j in range(n_frames):
+            spec = replace(draw(frames), reuse_buffer=False)
+            copies = draw(repeats) if not (j == n_frames - 1 and draw(stuck)) else math.ceil(2.0 / dt)  # frozen for 2 s
+            for _ in range(copies):
+                steps.append(Step(t_s=len(steps) * dt, speed_mps=draw(speeds), frame=spec))
+        return Case.drive(steps, note=f"a camera slower than the loop (every {dt:g} s)")
+
+    return camera_slower_than_loop()
+
+
 INVARIANTS: tuple[Invariant, ...] = (
     Invariant("1", "limits_in_range", "limits in range",
               "0 ≤ speed_limit_mps ≤ max_speed_mps; fear in [0, 1]; steering within ±max_steering_deg",
@@ -754,6 +847,13 @@ INVARIANTS: tuple[Invariant, ...] = (
               _stall_cases, check_stall, prefix_closed=True,
               pending="" if all(k in POLICY_FIELDS for k in WATCHDOG_KEYS) else
               "the timing watchdog (issue 10) is not in this fearguard: a frame 2 s late is answered as usual"),
+    Invariant("10", "refilled_buffer", "a refilled buffer is a new frame", "one buffer refilled with new pixels is analysed afresh",
+              _refill_cases, check_refilled_buffer, prefix_closed=True, pending="" if HAS_PIPELINE_OWNER else
+              "the frame pipeline's identity cache (issue 9) is still here: a refilled buffer repeats the first frame's cues"),
+    Invariant("10", "repeated_frames", "a repeated frame is no new frame",
+              "a repeated frame within a short window is 'no new frame', not a frozen camera", _repeat_cases, check_repeated_frames,
+              prefix_closed=True, pending="" if HAS_FROZEN_S else
+              "repeats are judged in frames, not seconds (issue 10): a 20 Hz loop on a 5 fps camera reads as a frozen camera"),
 )
 
 
