@@ -16,11 +16,11 @@ import cv2
 import numpy as np
 
 from fearguard.fuzzy.loader import load_rules
-from fearguard.sim.loop import FaultyEstimator
+from fearguard.observation import Observation
 from fearguard.sim.scenario import load_scenario
 from fearguard.sim.suite import BUNDLED
 from fearguard.sim.world import World
-from fearguard.supervisor import FearGuard, Observation
+from fearguard.supervisor import FearGuard
 from fearguard.vision.lane_steering import HoughLaneSteering
 
 SCENARIOS = ("clear_straight", "s_curves", "night", "occluding_traffic_follow_lead", "qr_markers_missing")
@@ -31,13 +31,14 @@ def run(name: str) -> dict[str, list[float]]:
     sc = load_scenario(BUNDLED / f"{name}.toml")
     world = World(sc, seed=sc.seed)
     lanes = HoughLaneSteering(camera=world.camera, fps=sc.camera.fps)
-    guard = FearGuard(FaultyEstimator(lanes, ()), rules=load_rules(sc.rules_path), vehicle=sc.vehicle.limits, camera=world.camera)
+    guard = FearGuard(lanes, rules=load_rules(sc.rules_path), vehicle=sc.vehicle.limits, camera=world.camera)
     stages: dict[str, list[float]] = {"render": [], "perception+supervisor": [], "world": []}
     for _ in range(FRAMES):
         t0 = time.perf_counter()
         s = world.sense()
         t1 = time.perf_counter()
-        cmd = guard.step(Observation(s.t_s, s.speed_mps, s.frame_bgr, None, s.ultrasonic_range_m, s.odometer_m))
+        cmd = guard.step(Observation(t_s=s.t_s, speed_mps=s.speed_mps, frame=s.frame_bgr, ultrasonic_range_m=s.ultrasonic_range_m,
+                                     odometer_m=s.odometer_m))
         t2 = time.perf_counter()
         world.advance(cmd.steering_deg, min(sc.cruise_speed_mps, cmd.speed_limit_mps))
         world.truth()

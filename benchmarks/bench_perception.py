@@ -44,10 +44,11 @@ def bench(size: tuple[int, int]) -> None:
             t_s += 0.05
             obs = fg.Observation(t_s=t_s, speed_mps=1.0, frame=frames[i % len(frames)], ultrasonic_range_m=2.0, odometer_m=t_s)
             start = time.perf_counter()
-            guard.step(obs)
+            cmd = guard.step(obs)
             per_frame.append((time.perf_counter() - start) * 1e3)
             all_steps.append(per_frame[-1])
-            for name, ms in guard.last_perception.timings_ms.items():
+            assert cmd.perceived is not None  # a frame was given: perception ran
+            for name, ms in cmd.perceived.timings_ms.items():
                 stages.setdefault(name, []).append(ms)
         step_ms.append(statistics.median(per_frame))
     step, decode = statistics.median(step_ms), statistics.median(decode_ms)

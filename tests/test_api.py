@@ -14,11 +14,24 @@ import fearguard as fg
 
 def test_public_names_are_exported_explicitly() -> None:
     expected = {"CUE_NAMES", "CameraModel", "Cause", "Command", "Cues", "FearGuard", "FearLevel", "FearResult",
-                "FearguardError", "FrameAnalysis", "HoughLaneSteering", "Lead", "LeadBox", "Mode", "Observation",
+                "FearguardError", "FrameAnalysis", "FrameSteering", "HoughLaneSteering", "Lead", "LeadBox", "Mode", "Observation",
                 "PolicyConfig", "RuleBase", "RuleError", "Strategy", "VehicleLimits", "analyze_frame", "load_camera",
                 "load_rules", "save_camera"}
     assert set(fg.__all__) == expected
     assert all(hasattr(fg, name) for name in fg.__all__)
+
+
+def test_values_moved_to_observation_keep_their_old_import_paths() -> None:
+    import fearguard.observation
+    import fearguard.policy
+    import fearguard.supervisor
+    import fearguard.vision.lead
+
+    assert fg.Lead is fearguard.observation.Lead is fearguard.policy.Lead
+    assert fg.LeadBox is fearguard.observation.LeadBox is fearguard.vision.lead.LeadBox
+    assert fg.Observation is fearguard.observation.Observation is fearguard.supervisor.Observation
+    assert [f.name for f in dataclasses.fields(fg.Observation)] == [
+        "t_s", "speed_mps", "frame", "cues", "ultrasonic_range_m", "odometer_m", "qr_payload", "lead", "ultrasonic_echo_s"]
 
 
 def test_design_contract_signatures() -> None:
@@ -31,8 +44,10 @@ def test_design_contract_signatures() -> None:
     obs = fg.Observation(t_s=0.0, speed_mps=1.0, frame=None, cues=None, ultrasonic_range_m=None,
                          odometer_m=None, qr_payload=None, lead=None)
     cmd = fg.FearGuard(lambda frame: 0.0).step(obs)
-    for name in ("steering_deg", "speed_limit_mps", "mode", "strategy", "fear", "fear_level", "cues", "reasons"):
+    for name in ("steering_deg", "speed_limit_mps", "mode", "strategy", "fear", "fear_level", "cues", "reasons", "perceived"):
         assert hasattr(cmd, name)
+    perceived = next(f for f in dataclasses.fields(fg.Command) if f.name == "perceived")
+    assert not perceived.compare and not perceived.repr and perceived.default is None
     assert fg.Lead(1.0).range_m is None
     for name in ("max_speed_mps", "max_decel_mps2", "reaction_time_s", "stop_margin_m", "max_steering_deg"):
         assert name in {f.name for f in dataclasses.fields(fg.VehicleLimits)}
@@ -49,6 +64,7 @@ def test_analyze_frame_contract() -> None:
     assert a.steering_deg is None  # a blank grey frame shows no lane
     steer = fg.HoughLaneSteering()
     assert isinstance(steer(frame), float)
+    assert isinstance(steer, fg.FrameSteering) and isinstance(steer.steer_from(steer.pipeline.process(frame)), float)
 
 
 def test_camera_projection_and_its_inverse_agree(tmp_path: Path) -> None:

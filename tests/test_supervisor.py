@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -280,12 +281,67 @@ def test_emergency_remembers_why_it_braked_for_hold_s(guard) -> None:
 
 def test_a_wrapped_hough_steering_shares_the_pipeline_and_the_camera() -> None:
     cam = fg.CameraModel.default(320, 240, mount_height_m=0.15, pitch_deg=13.0)
-    steer = fg.HoughLaneSteering()
+    steer = fg.HoughLaneSteering(camera=cam)
     guard = fg.FearGuard(steer, camera=cam)
-    assert guard.perception.pipeline is steer.pipeline and steer.pipeline.camera is cam
+    assert guard.perception.pipeline is steer.pipeline and guard.camera is cam
+    assert fg.FearGuard(fg.HoughLaneSteering(camera=cam)).camera is cam  # camera=None: the steering's camera
     frame = np.full((240, 320, 3), 90, np.uint8)  # a blank road: no lane, so vision says so
     marker = "FG1;route=a;sector=0;pos_m=0.0"
     cmd = guard.step(fg.Observation(t_s=0.0, speed_mps=1.0, frame=frame, ultrasonic_range_m=math.inf, qr_payload=marker))
     assert cmd.cues.lane_confidence == 0.0 and cmd.cues.qr_staleness_s == 0.0 and math.isinf(cmd.cues.obstacle_range_m)
     assert any(r.startswith("lane: confidence 0.00") for r in cmd.reasons)
-    assert guard.last_perception is not None and "vision" in guard.last_perception.timings_ms
+    assert cmd.perceived is not None and "vision" in cmd.perceived.timings_ms
+
+
+@pytest.mark.parametrize("steering_camera", [None, fg.CameraModel.default(320, 240, hfov_deg=90.0)])
+def test_a_camera_that_disagrees_with_the_steering_pipeline_is_refused(steering_camera) -> None:
+    cam = fg.CameraModel.default(320, 240, mount_height_m=0.15, pitch_deg=13.0)
+    with pytest.raises(ValueError, match="another camera model"):
+        fg.FearGuard(fg.HoughLaneSteering(camera=steering_camera), camera=cam)
+
+
+def test_a_frame_steering_must_bring_a_frame_pipeline() -> None:
+    class NotAPipeline:
+        pipeline = object()
+
+        def __call__(self, frame: object) -> float:
+            return 0.0
+
+        def steer_from(self, analysis: object) -> float:
+            return 0.0
+
+    with pytest.raises(TypeError, match="FramePipeline"):
+        fg.FearGuard(NotAPipeline())
+
+
+def test_the_command_carries_the_facts_of_its_own_frame(rules) -> None:
+    guard = fg.FearGuard(fg.HoughLaneSteering(), rules=rules)
+    frame = np.full((240, 320, 3), 90, np.uint8)
+    seen = guard.step(fg.Observation(t_s=0.0, speed_mps=1.0, frame=frame))
+    assert seen.perceived is not None and seen.perceived.analysis is not None
+    blind = guard.step(fg.Observation(t_s=0.1, speed_mps=1.0, frame=None))
+    assert blind.perceived is not None and blind.perceived.analysis is None  # no frame: no stale lanes for the overlay
+    assert guard.step(fg.Observation(t_s=0.2, cues=CALM)).perceived is None  # cue level: perception did not run
+    assert guard.step(fg.Observation(t_s=0.1, frame=frame)).perceived is None  # a fault before perception
+    assert dataclasses.replace(seen, perceived=None) == seen and "perceived" not in repr(seen)
+
+
+def test_the_steering_of_a_frame_steering_comes_from_the_same_analysis(rules) -> None:
+    calls: list[str] = []
+
+    class Recording(fg.HoughLaneSteering):
+        def __call__(self, frame: object) -> float:
+            calls.append("frame")
+            return super().__call__(frame)
+
+        def steer_from(self, analysis) -> float:
+            calls.append("analysis")
+            return 4.0
+
+    guard = fg.FearGuard(Recording(), rules=rules)
+    frame = np.full((240, 320, 3), 90, np.uint8)
+    cmd = guard.step(fg.Observation(t_s=0.0, speed_mps=0.5, frame=frame))
+    assert calls == ["analysis"] and guard.perception.pipeline._frames == 1  # analysed once, for cues and steering
+    guard.step(fg.Observation(t_s=0.1, speed_mps=0.5, frame=None))
+    assert calls == ["analysis", "frame", "analysis"]  # nothing analysed by perception: the steering sees the frame
+    assert cmd.cues.lane_confidence == 0.0

@@ -89,7 +89,7 @@ def test_the_occluding_vehicle_is_found_as_a_lead_straight_ahead(stills):
 
 def _replay(path: Path, every: int = 1) -> tuple[float, np.ndarray]:
     cap = cv2.VideoCapture(str(path))
-    pipe = FramePipeline(qr=False)
+    pipe = FramePipeline()
     both, angles, n = 0, [], 0
     while True:
         ok, frame = cap.read()

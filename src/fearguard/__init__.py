@@ -9,12 +9,13 @@ from fearguard.errors import FearguardError, RuleError
 from fearguard.fear import Cause, FearLevel, FearResult
 from fearguard.fuzzy.loader import load_rules
 from fearguard.fuzzy.rulebase import RuleBase
-from fearguard.policy import Lead, Mode, PolicyConfig, Strategy
-from fearguard.supervisor import Command, FearGuard, Observation
+from fearguard.observation import Lead, LeadBox, Observation
+from fearguard.perception import FrameSteering
+from fearguard.policy import Mode, PolicyConfig, Strategy
+from fearguard.supervisor import Command, FearGuard
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.frame import FrameAnalysis, analyze_frame
 from fearguard.vision.lane_steering import HoughLaneSteering
-from fearguard.vision.lead import LeadBox
 
 __all__ = [
     "CUE_NAMES",
@@ -27,6 +28,7 @@ __all__ = [
     "FearResult",
     "FearguardError",
     "FrameAnalysis",
+    "FrameSteering",
     "HoughLaneSteering",
     "Lead",
     "LeadBox",

@@ -16,8 +16,8 @@ from fearguard.cues import CUE_NAMES, Cues
 from fearguard.errors import FearguardError
 from fearguard.fuzzy.check import check_rules
 from fearguard.fuzzy.loader import load_rules
-from fearguard.policy import Lead
-from fearguard.supervisor import FearGuard, Observation
+from fearguard.observation import Lead, Observation
+from fearguard.supervisor import FearGuard
 
 EXPLAIN_SETTLE_S = 10.0  # [s] explain shows the command after this long with the same cues
 EXPLAIN_RATE_HZ = 10.0  # [Hz] frame rate of that settling run

@@ -7,8 +7,8 @@ from collections.abc import Iterator
 
 from fearguard.cues import Cues
 from fearguard.fuzzy.rulebase import RuleBase
-from fearguard.policy import Lead
-from fearguard.supervisor import FearGuard, Observation
+from fearguard.observation import Lead, Observation
+from fearguard.supervisor import FearGuard
 
 RATE_HZ = 10.0  # [Hz]
 # (from s, label, cues, lead): a 1:10 car on a track with QR markers

@@ -12,21 +12,40 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
 from fearguard.camera import CameraModel
 from fearguard.cues import Cues, real_number
-from fearguard.policy import Lead
+from fearguard.observation import Lead, LeadBox, Observation
 from fearguard.sensors.localisation import LocalisationState, QrLocaliser
 from fearguard.sensors.ultrasonic import RangeEstimate, UltrasonicFilter
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.frame import FrameAnalysis, FramePipeline
-from fearguard.vision.lead import LeadBox
 
 FROZEN_FRAMES = 3  # [frames] identical frames in a row that mean the camera froze (real sensors always have noise)
 ULTRASONIC_CONE_DEG = 15.0  # [deg] a lead within ±half this bearing is what the ultrasonic sees
 _NAN = math.nan
+_UNSEEN = FrameAnalysis(lane_confidence=_NAN, brightness=_NAN, occlusion=_NAN, lead=None, qr_payloads=(), steering_deg=None)
+
+
+@runtime_checkable
+class FrameSteering(Protocol):
+    """A steering function built on fearguard's own frame analysis (``HoughLaneSteering`` is one).
+
+    The handshake with the supervisor: perception analyses each frame once with ``pipeline`` (its
+    camera is the supervisor's camera), then the supervisor asks ``steer_from`` for the angle of that
+    same analysis — the cues and the steering describe one frame, with no cache in between. Frames
+    perception did not analyse (frozen, missing, cue-level) go through ``__call__`` as usual.
+    """
+
+    @property
+    def pipeline(self) -> FramePipeline: ...
+
+    def __call__(self, frame: object) -> float: ...
+
+    def steer_from(self, analysis: FrameAnalysis) -> float: ...
 
 
 @dataclass(frozen=True)
@@ -37,7 +56,7 @@ class Perceived:
     lead: Lead | None
     alerts: tuple[str, ...]  # readings unknown or rejected: always worth reporting
     facts: tuple[str, ...] = ()  # the measurements behind the cues: reported when fear is up
-    analysis: FrameAnalysis | None = None
+    analysis: FrameAnalysis | None = None  # this frame's analysis by the pipeline; None when it did not run
     range_estimate: RangeEstimate | None = None
     localisation: LocalisationState | None = None
     timings_ms: dict[str, float] = field(default_factory=dict)
@@ -50,9 +69,18 @@ class Perception:
         self, vehicle: VehicleLimits | None = None, camera: CameraModel | None = None, pipeline: FramePipeline | None = None,
         marker_spacing_m: float = 5.0,
     ) -> None:
+        """``pipeline``: analyse frames with this one (a FrameSteering's); its camera must be ``camera`` if both are given."""
         self.vehicle = vehicle if vehicle is not None else VehicleLimits()
+        if pipeline is not None and not isinstance(pipeline, FramePipeline):
+            raise TypeError(f"pipeline must be a FramePipeline, got {type(pipeline).__name__}")
+        if pipeline is not None and camera is not None and pipeline.camera != camera:
+            raise ValueError(
+                "the steering's frame pipeline has another camera model than the one given to the supervisor: "
+                "build both with the same camera (e.g. HoughLaneSteering(camera=cam) and FearGuard(..., camera=cam))"
+            )
         self.pipeline = pipeline if pipeline is not None else FramePipeline(camera)
-        self.pipeline.qr = self.vehicle.has_qr_localisation  # no QR localisation on this car: no QR scan either
+        self.camera = self.pipeline.camera
+        self.scan_qr = self.vehicle.has_qr_localisation  # no QR localisation on this car: no QR scan either
         self.ultrasonic = UltrasonicFilter(self.vehicle.ultrasonic_min_range_m, self.vehicle.ultrasonic_max_range_m)
         self.localiser = QrLocaliser(marker_spacing_m=marker_spacing_m)
         self._marker_spacing_m = marker_spacing_m
@@ -65,44 +93,45 @@ class Perception:
         self.localiser = QrLocaliser(marker_spacing_m=self._marker_spacing_m)
         self._last_signature, self._same_frames = None, 0
 
-    def perceive(self, obs: object) -> Perceived:
-        """Cues for one Observation (any object with its fields; missing fields count as missing readings)."""
+    def perceive(self, obs: Observation) -> Perceived:
+        """Cues for one Observation; readings that are missing or not numbers count as missing."""
         clock = time.perf_counter
         t0 = clock()
-        t_s = real_number(getattr(obs, "t_s", None))
+        t_s = real_number(obs.t_s)
         t = t_s if t_s is not None else _NAN
         reasons: list[str] = []  # alerts
         facts: list[str] = []
-        frame = getattr(obs, "frame", None)
-        given_lead = getattr(obs, "lead", None)
-        box = given_lead if isinstance(given_lead, LeadBox) else None
-        analysis = self._vision(frame, t, box, reasons, facts)
-        lane, brightness, occ = analysis.lane_confidence, analysis.brightness, analysis.occlusion
+        box = obs.lead if isinstance(obs.lead, LeadBox) else None
+        analysis = self._vision(obs.frame, t, box, reasons, facts)
+        seen = analysis if analysis is not None else _UNSEEN
         t1 = clock()
         range_m, estimate = self._range(obs, t, reasons, facts)
         t2 = clock()
-        staleness, loc = self._staleness(obs, t, analysis.qr_payloads, facts)
+        staleness, loc = self._staleness(obs, t, seen.qr_payloads, facts)
         t3 = clock()
-        lead = given_lead if isinstance(given_lead, Lead) else analysis.lead
+        lead = obs.lead if isinstance(obs.lead, Lead) else seen.lead
         lead = self._fuse_lead_range(lead, range_m)
-        timings = {f"vision.{k}": v for k, v in analysis.timings_ms.items()}
+        timings = {f"vision.{k}": v for k, v in seen.timings_ms.items()}
         timings.update(vision=(t1 - t0) * 1e3, ultrasonic=(t2 - t1) * 1e3, localisation=(t3 - t2) * 1e3)
-        cues = Cues(lane, brightness, occ, range_m, staleness)
-        return Perceived(cues, lead, tuple(reasons), tuple(facts), analysis, estimate, loc, timings)
+        cues = Cues(lane_confidence=seen.lane_confidence, brightness=seen.brightness, occlusion=seen.occlusion,
+                    obstacle_range_m=range_m, qr_staleness_s=staleness)
+        return Perceived(cues=cues, lead=lead, alerts=tuple(reasons), facts=tuple(facts), analysis=analysis,
+                         range_estimate=estimate, localisation=loc, timings_ms=timings)
 
     # -- camera ---------------------------------------------------------------------------------
-    def _vision(self, frame: object, t: float, box: LeadBox | None, reasons: list[str], facts: list[str]) -> FrameAnalysis:
+    def _vision(self, frame: object, t: float, box: LeadBox | None, reasons: list[str], facts: list[str]) -> FrameAnalysis | None:
+        """This frame's analysis by the pipeline, or None when there was nothing to analyse (the cues are unknown)."""
         if frame is None:
             reasons.append("camera: no frame: vision cues unknown (worst)")
-            return FrameAnalysis(_NAN, _NAN, _NAN, None, (), None)
+            return None
         if self._frozen(frame):
             reasons.append(f"camera: frozen ({self._same_frames} identical frames): vision cues unknown (worst)")
-            return FrameAnalysis(_NAN, _NAN, _NAN, None, (), None)
+            return None
         try:
-            analysis = self.pipeline.process(frame, t if math.isfinite(t) else None, box)
+            analysis = self.pipeline.process(frame, t if math.isfinite(t) else None, box, scan_qr=self.scan_qr)
         except Exception as exc:  # vision is a measurement: its failure is an unknown, not a crash
             reasons.append(f"camera: analysis failed ({type(exc).__name__}: {exc}): vision cues unknown (worst)")
-            return FrameAnalysis(_NAN, _NAN, _NAN, None, (), None)
+            return None
         reasons.extend(analysis.reasons)
         ev, ex = analysis.evidence, analysis.exposure
         if ev is not None:
@@ -130,10 +159,10 @@ class Perception:
         return self._same_frames >= FROZEN_FRAMES
 
     # -- ultrasonic -----------------------------------------------------------------------------
-    def _range(self, obs: object, t: float, reasons: list[str], facts: list[str]) -> tuple[float, RangeEstimate | None]:
+    def _range(self, obs: Observation, t: float, reasons: list[str], facts: list[str]) -> tuple[float, RangeEstimate | None]:
         if not self.vehicle.has_ultrasonic:
             return math.inf, None  # no sensor: nothing known in range, declared not faked
-        est = self.ultrasonic.update(t, getattr(obs, "ultrasonic_range_m", None), getattr(obs, "ultrasonic_echo_s", None))
+        est = self.ultrasonic.update(t, obs.ultrasonic_range_m, obs.ultrasonic_echo_s)
         if math.isfinite(est.range_m):
             ttc = f", TTC {est.ttc_s:.1f} s" if math.isfinite(est.ttc_s) else ""
             facts.append(f"ultrasonic: obstacle at {est.range_m:.2f} m, closing {est.closing_speed_mps:+.2f} m/s{ttc}")
@@ -143,15 +172,14 @@ class Perception:
 
     # -- QR localisation -------------------------------------------------------------------------
     def _staleness(
-        self, obs: object, t: float, seen: tuple[str, ...], reasons: list[str]
+        self, obs: Observation, t: float, seen: tuple[str, ...], reasons: list[str]
     ) -> tuple[float, LocalisationState | None]:
         if not self.vehicle.has_qr_localisation:
             return 0.0, None  # no QR localisation on this car: the cue does not apply
         payloads = list(seen)
-        given = getattr(obs, "qr_payload", None)
-        if given is not None:
-            payloads.append(given)
-        state = self.localiser.update(t, payloads, real_number(getattr(obs, "odometer_m", None)))
+        if obs.qr_payload is not None:
+            payloads.append(obs.qr_payload)
+        state = self.localiser.update(t, payloads, real_number(obs.odometer_m))
         reasons.extend(state.reasons)
         return state.staleness_s, state
 

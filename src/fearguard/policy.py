@@ -23,6 +23,7 @@ import numpy as np
 from fearguard.cues import finite_number
 from fearguard.errors import RuleError
 from fearguard.fear import LEVEL_NAMES, Cause
+from fearguard.observation import Lead  # defined with the other plain values; fearguard.policy.Lead keeps working
 from fearguard.vehicle import VehicleLimits
 
 ENVELOPE_SHRINK = 1e-9  # [-] keeps v·t_r + v²/2a ≤ d − margin true after floating-point rounding
@@ -39,24 +40,6 @@ class Strategy(Enum):
     FOLLOW_LEAD = "FOLLOW_LEAD"
     STOP = "STOP"
     CRAWL = "CRAWL"
-
-
-@dataclass(frozen=True)
-class Lead:
-    """The vehicle ahead in the ego lane: bearing (deg, + = left) and range if known (m)."""
-
-    bearing_deg: float
-    range_m: float | None = None
-
-    @property
-    def usable(self) -> bool:
-        """A lead can be followed when its bearing is a finite number (a range is optional)."""
-        return _finite(self.bearing_deg)
-
-    @property
-    def usable_range_m(self) -> float | None:
-        r = finite_number(self.range_m)
-        return r if r is not None and r >= 0.0 else None
 
 
 def _finite(value: object) -> bool:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from fearguard.camera import CameraModel
@@ -18,9 +18,9 @@ from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues, finite
 from fearguard.fear import Cause, FearLevel, FearResult
 from fearguard.fuzzy.loader import load_rules
 from fearguard.fuzzy.rulebase import RuleBase
-from fearguard.perception import Perceived, Perception
+from fearguard.observation import Lead, Observation  # Observation re-exported: fearguard.supervisor.Observation keeps working
+from fearguard.perception import FrameSteering, Perceived, Perception
 from fearguard.policy import (
-    Lead,
     Mode,
     ModeState,
     Strategy,
@@ -32,26 +32,9 @@ from fearguard.policy import (
     rate_limited_mps,
 )
 from fearguard.vehicle import VehicleLimits
-from fearguard.vision.frame import FramePipeline
-from fearguard.vision.lead import LeadBox
 
 SteeringFunction = Callable[[Any], float]
 TOP_RULES_IN_REASONS = 3  # [-] rules quoted in a command's reasons
-
-
-@dataclass(frozen=True)
-class Observation:
-    """What the car knows at one instant. Give ``cues`` to skip perception (cue-level use)."""
-
-    t_s: float
-    speed_mps: float = 0.0
-    frame: Any = None
-    cues: Cues | None = None
-    ultrasonic_range_m: float | None = None
-    odometer_m: float | None = None
-    qr_payload: str | None = None
-    lead: Lead | LeadBox | None = None  # a Lead, or a box from an external detector (frame pixels)
-    ultrasonic_echo_s: float | None = None  # raw HC-SR04 echo time, used when ultrasonic_range_m is None
 
 
 @dataclass(frozen=True)
@@ -69,6 +52,9 @@ class Command:
     fear_limit_mps: float = math.nan  # the fear-based part of the limit
     envelope_mps: float = math.nan  # the stopping envelope for the obstacle range
     cause: Cause | None = None  # the cause with the largest share of the fear; None for a fault
+    # what perception measured on THIS frame (lanes, lead box, timings: for logs and overlays); None for cue-level
+    # frames and faults before perception. Not part of the decision: excluded from equality and repr.
+    perceived: Perceived | None = field(default=None, compare=False, repr=False)
 
 
 @dataclass
@@ -80,7 +66,12 @@ class _State:
 
 
 class FearGuard:
-    """Fuzzy affective safety supervisor around a steering function (frame → degrees, + = left)."""
+    """Fuzzy affective safety supervisor around a steering function (frame → degrees, + = left).
+
+    A ``FrameSteering`` (``HoughLaneSteering``) shares its frame pipeline: each frame is analysed once,
+    for the cues and the steering. Its camera is the supervisor's camera; giving another one is a
+    ``ValueError`` (``camera=None`` takes the steering's).
+    """
 
     def __init__(
         self,
@@ -92,20 +83,16 @@ class FearGuard:
         self.steer = steer
         self.rules = rules if isinstance(rules, RuleBase) else load_rules(rules)
         self.vehicle = vehicle if vehicle is not None else VehicleLimits()
-        shared = getattr(steer, "pipeline", None)  # HoughLaneSteering (or a wrapper exposing its pipeline)
-        shared = shared if isinstance(shared, FramePipeline) else None
-        self.camera = camera if camera is not None or shared is None else shared.camera
-        if shared is not None and camera is not None and shared.camera is None:
-            shared.camera = camera  # one camera model for the cues and the wrapped lane steering
-        self.perception = Perception(self.vehicle, self.camera, shared)
-        self.last_perception: Perceived | None = None  # the facts behind the last command (for logs, overlays, benchmarks)
+        self._frame_steering = steer if isinstance(steer, FrameSteering) else None
+        shared = self._frame_steering.pipeline if self._frame_steering is not None else None
+        self.perception = Perception(self.vehicle, camera, shared)
+        self.camera = self.perception.camera
         self._state = _State()
 
     def reset(self) -> None:
         """Forget all history (mode, timers, speed-limit ramp, trackers)."""
         self._state = _State()
         self.perception.reset()
-        self.last_perception = None
 
     def step(self, obs: Observation) -> Command:
         """One frame: never raises; any fault becomes a safe command with a reason."""
@@ -124,24 +111,23 @@ class FearGuard:
             return self._fault_command(obs, f"fault: time t_s={obs.t_s!r} is not a finite number", None)
         if st.last_t_s is not None and t <= st.last_t_s:
             return self._fault_command(obs, f"fault: time did not increase ({st.last_t_s:.3f} s → {t:.3f} s)", t)
-        cues, cue_notes, facts, lead = self._cues(obs)
+        cues, cue_notes, perceived, lead = self._cues(obs)
         result = self.rules.evaluate(cues)
-        steering, steer_fault = self._steering(obs)
+        steering, steer_fault = self._steering(obs, perceived)
         if steer_fault:
-            return self._fault_command(obs, steer_fault, t, cues, result)
-        return self._decide(obs, t, cues, result, steering, cue_notes, facts, lead)
+            return self._fault_command(obs, steer_fault, t, cues, result, perceived)
+        return self._decide(obs, t, cues, result, steering, cue_notes, lead, perceived)
 
-    def _cues(self, obs: Observation) -> tuple[Cues, list[str], tuple[str, ...], Lead | None]:
+    def _cues(self, obs: Observation) -> tuple[Cues, list[str], Perceived | None, Lead | None]:
         """Cues from the observation (given, or measured by perception); absent sensors neutral, failed ones worst."""
         notes: list[str] = []
-        facts: tuple[str, ...] = ()
+        perceived: Perceived | None = None
         lead = obs.lead if isinstance(obs.lead, Lead) else None
         if isinstance(obs.cues, Cues):
             values = obs.cues.values()
         else:
             perceived = self.perception.perceive(obs)
-            self.last_perception = perceived
-            values, lead, facts = perceived.cues.values(), perceived.lead, perceived.facts
+            values, lead = perceived.cues.values(), perceived.lead
             notes.extend(perceived.alerts)
         if not self.vehicle.has_ultrasonic:
             values[OBSTACLE_RANGE] = math.inf  # no sensor: nothing known in range, declared not faked
@@ -150,11 +136,16 @@ class FearGuard:
         for name, v in zip(CUE_NAMES, values, strict=True):
             if not isinstance(v, float) or math.isnan(v):
                 notes.append(f"{name} unknown: counted as its worst value")
-        return Cues(*values), notes, facts, lead
+        return Cues(*values), notes, perceived, lead
 
-    def _steering(self, obs: Observation) -> tuple[float, str]:
+    def _steering(self, obs: Observation, perceived: Perceived | None) -> tuple[float, str]:
+        """The wrapped steering's angle: from this frame's analysis for a FrameSteering, else from the frame."""
+        analysis = perceived.analysis if perceived is not None else None
         try:
-            raw = self.steer(obs.frame)
+            if self._frame_steering is not None and analysis is not None:
+                raw = self._frame_steering.steer_from(analysis)
+            else:
+                raw = self.steer(obs.frame)
         except Exception as exc:  # the wrapped estimator is foreign code: any failure is a fault
             return 0.0, f"fault: steering function raised {type(exc).__name__}: {exc}"
         value = finite_number(raw)
@@ -167,7 +158,7 @@ class FearGuard:
 
     def _decide(
         self, obs: Observation, t: float, cues: Cues, result: FearResult, steering: float, notes: list[str],
-        facts: tuple[str, ...], lead: Lead | None,
+        lead: Lead | None, perceived: Perceived | None,
     ) -> Command:
         st, v, cfg = self._state, self.vehicle, self.rules.policy
         speed = finite_number(obs.speed_mps)
@@ -176,7 +167,7 @@ class FearGuard:
         imminent = imminent_collision(range_m, speed_now, v)
         over = frozenset(c for c, f in result.cause_fears.items() if f >= cfg.emergency_enter_fear)
         over |= {Cause.COLLISION} if imminent else set()
-        st.mode, event = next_mode(st.mode, result.fear, t, imminent, cfg, result.cause_fears, over)
+        st.mode, event = next_mode(st.mode, result.fear, t, at_once=imminent, cfg=cfg, cause_fears=result.cause_fears, over=over)
         fear_limit = fear_speed_mps(result.fear, self.rules.level_anchors, cfg, v)
         envelope = envelope_speed_mps(range_m, v)
         target = min(fear_limit, envelope)
@@ -201,11 +192,12 @@ class FearGuard:
         reasons.append(self._limit_reason(limit, fear_limit, envelope, target, range_m))
         if result.level > FearLevel.VERY_LOW or mode is not Mode.NORMAL:
             reasons.extend(f"rule {text!r} fired {s:.2f}" for text, s in result.top_rules(TOP_RULES_IN_REASONS))
-            reasons.extend(facts)
+            reasons.extend(perceived.facts if perceived is not None else ())
         reasons.extend(notes)
         return Command(
-            out_steering, limit, mode, strategy, result.fear, result.level, cues, tuple(reasons), fear_limit, envelope,
-            result.dominant_cause,
+            steering_deg=out_steering, speed_limit_mps=limit, mode=mode, strategy=strategy, fear=result.fear,
+            fear_level=result.level, cues=cues, reasons=tuple(reasons), fear_limit_mps=fear_limit, envelope_mps=envelope,
+            cause=result.dominant_cause, perceived=perceived,
         )
 
     @staticmethod
@@ -225,21 +217,24 @@ class FearGuard:
 
     # -- faults ---------------------------------------------------------------------------------
     def _fault_command(
-        self, obs: object, why: str, t: float | None, cues: Cues | None = None, result: FearResult | None = None
+        self, obs: object, why: str, t: float | None, cues: Cues | None = None, result: FearResult | None = None,
+        perceived: Perceived | None = None,
     ) -> Command:
         """EMERGENCY/STOP at once, steering held at the last trusted angle; the clock restarts at t."""
         st = self._state
         if t is not None:
-            st.mode, _ = next_mode(st.mode, 1.0, t, True, self.rules.policy, fault=True)
+            st.mode, _ = next_mode(st.mode, 1.0, t, at_once=True, cfg=self.rules.policy, fault=True)
             st.last_t_s = t
         else:  # no usable clock: latch the stop without touching the timers
-            m = st.mode
-            st.mode = ModeState(Mode.EMERGENCY, m.frames_over, m.entered_s, m.below_since_s, m.latched, fault=True)
+            st.mode = replace(st.mode, mode=Mode.EMERGENCY, fault=True)
         st.limit_mps = 0.0
         cues = cues if cues is not None else Cues(*([math.nan] * len(CUE_NAMES)))
         fear = result.fear if result is not None else 1.0
         level = result.level if result is not None else FearLevel.VERY_HIGH
         held = max(-self.vehicle.max_steering_deg, min(self.vehicle.max_steering_deg, st.trusted_steering_deg))
         reasons = (why, f"EMERGENCY STOP: fault, holding {held:+.1f} deg")
-        return Command(held, 0.0, Mode.EMERGENCY, Strategy.STOP, fear, level, cues, reasons, 0.0, 0.0)
+        return Command(
+            steering_deg=held, speed_limit_mps=0.0, mode=Mode.EMERGENCY, strategy=Strategy.STOP, fear=fear, fear_level=level,
+            cues=cues, reasons=reasons, fear_limit_mps=0.0, envelope_mps=0.0, perceived=perceived,
+        )
 

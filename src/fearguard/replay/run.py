@@ -19,14 +19,14 @@ from typing import Any
 
 from fearguard.camera import CameraModel, load_camera
 from fearguard.fuzzy.loader import load_rules
+from fearguard.observation import LeadBox, Observation
 from fearguard.overlay import VideoOut, annotate
 from fearguard.replay.sensor_log import SensorLog, load_sensor_log
 from fearguard.replay.sources import open_source, parse_position
 from fearguard.report import JsonlLog, command_record, json_value, plot_timeline, read_jsonl, summarize
-from fearguard.supervisor import FearGuard, Observation
+from fearguard.supervisor import FearGuard
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.lane_steering import HoughLaneSteering
-from fearguard.vision.lead import LeadBox
 
 
 @dataclass(frozen=True)
@@ -84,7 +84,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
                 extra["recorded_throttle"] = frame.record.get("user/throttle")
             log.write(command_record(frame.index, frame.t_s, cmd, **extra))
             if video is not None:
-                analysis = guard.last_perception.analysis if guard.last_perception is not None else None
+                analysis = cmd.perceived.analysis if cmd.perceived is not None else None
                 video.write(annotate(frame.image_bgr, cmd, analysis, f"t {frame.t_s:.1f} s"))
             done += 1
             if on_frame is not None:

@@ -17,14 +17,17 @@ from typing import Any
 
 import numpy as np
 
+from fearguard.camera import CameraModel
 from fearguard.fuzzy.loader import load_rules
+from fearguard.observation import Observation
 from fearguard.overlay import VideoOut, annotate
 from fearguard.report import JsonlLog, command_record
 from fearguard.sim.baselines import BASELINES, Baseline
 from fearguard.sim.metrics import Metrics, check_expectations
 from fearguard.sim.scenario_values import Scenario, SteeringFault
 from fearguard.sim.world import World
-from fearguard.supervisor import Command, FearGuard, Observation
+from fearguard.supervisor import Command, FearGuard
+from fearguard.vision.frame import FrameAnalysis
 from fearguard.vision.lane_steering import HoughLaneSteering
 
 CONTROLLERS = ("guarded", *BASELINES)
@@ -34,17 +37,16 @@ class EstimatorFault(RuntimeError):
     """Raised by the faulty steering estimator of a scenario (the supervisor must survive it)."""
 
 
-class FaultyEstimator:
-    """Wraps a steering function and applies the scenario's estimator faults at their times."""
+class FaultyEstimator(HoughLaneSteering):
+    """The lane steering with the scenario's estimator faults applied at their times (``t_s`` set by the loop)."""
 
-    def __init__(self, inner: Callable[[Any], float], faults: tuple[SteeringFault, ...]) -> None:
-        self.inner, self.faults = inner, faults
-        self.pipeline = getattr(inner, "pipeline", None)  # lets FearGuard share the estimator's frame analysis
+    def __init__(self, faults: tuple[SteeringFault, ...], camera: CameraModel | None = None, fps: float = 20.0) -> None:
+        super().__init__(camera, fps)
+        self.faults = faults
         self.t_s = 0.0
-        self._stuck: float | None = None
 
-    def __call__(self, frame: Any) -> float:
-        angle = self.inner(frame)
+    def steer_from(self, analysis: FrameAnalysis) -> float:
+        angle = super().steer_from(analysis)
         for f in self.faults:
             if f.active(self.t_s):
                 if f.kind == "raise":
@@ -85,8 +87,7 @@ def run_scenario(
     seed = scenario.seed if seed is None else seed
     world = World(scenario, seed=seed)
     camera = world.camera
-    lanes = HoughLaneSteering(camera=camera, fps=scenario.camera.fps)
-    estimator = FaultyEstimator(lanes, scenario.faults.steering)
+    estimator = FaultyEstimator(scenario.faults.steering, camera=camera, fps=scenario.camera.fps)
     profile = scenario.vehicle
     limits = profile.limits
     if scenario.sensors is not None:  # the range sensor the scenario's car carries (HC-SR04 on a model car, radar-like on a road car)
@@ -106,12 +107,15 @@ def run_scenario(
             sens = world.sense()
             estimator.t_s = sens.t_s
             cmd: Command | None = None
+            analysis: FrameAnalysis | None = None
             if baseline is None:
-                obs = Observation(sens.t_s, sens.speed_mps, sens.frame_bgr, None, sens.ultrasonic_range_m, sens.odometer_m)
+                obs = Observation(t_s=sens.t_s, speed_mps=sens.speed_mps, frame=sens.frame_bgr,
+                                  ultrasonic_range_m=sens.ultrasonic_range_m, odometer_m=sens.odometer_m)
                 cmd = guard.step(obs)
                 steering, target = cmd.steering_deg, min(profile.cruise_speed_mps, cmd.speed_limit_mps)
+                analysis = cmd.perceived.analysis if cmd.perceived is not None else None
             else:
-                steering = _unsupervised_steering(estimator, sens.frame_bgr, last_steer, profile.max_steering_deg)
+                steering, analysis = _unsupervised_steering(estimator, sens.frame_bgr, last_steer, profile.max_steering_deg)
                 target = baseline.speed_target(sens.t_s, sens.ultrasonic_range_m)
             last_steer = steering
             world.advance(steering, target)
@@ -129,9 +133,6 @@ def run_scenario(
                     ultrasonic_raw_m=sens.ultrasonic_range_m,
                 ))
             if video is not None:
-                analysis = guard.last_perception.analysis if cmd is not None and guard.last_perception is not None else None
-                if analysis is None and cmd is None:
-                    analysis = lanes.pipeline.process(sens.frame_bgr)
                 video.write(annotate(sens.frame_bgr, cmd, analysis, f"v {truth.speed_mps:.2f} m/s"))
             frame_index += 1
             if on_frame is not None:
@@ -151,10 +152,17 @@ def run_scenario(
     return RunResult(scenario.name, controller, seed, summary, expectations, frame_index, interrupted)
 
 
-def _unsupervised_steering(estimator: Callable[[Any], float], frame: np.ndarray, last: float, limit: float) -> float:
-    """What a car without a supervisor does with its estimator's answer: use it; on a fault, keep the last angle."""
+def _unsupervised_steering(
+    estimator: FaultyEstimator, frame: np.ndarray, last: float, limit: float
+) -> tuple[float, FrameAnalysis | None]:
+    """What a car without a supervisor does with its estimator's answer: use it; on a fault, keep the last angle.
+
+    Also returns the frame's analysis (for the video), None if the analysis itself failed.
+    """
+    analysis = None
     try:
-        angle = float(estimator(frame))
+        analysis = estimator.pipeline.process(frame)
+        angle = float(estimator.steer_from(analysis))
     except Exception:  # an unsupervised car has no better idea than holding the wheel
-        return last
-    return max(-limit, min(limit, angle)) if math.isfinite(angle) else last
+        return last, analysis
+    return (max(-limit, min(limit, angle)) if math.isfinite(angle) else last), analysis

@@ -1,8 +1,9 @@
 """One camera frame → the vision cues, the lead vehicle, QR payloads and the baseline steering angle.
 
 ``analyze_frame`` is the stateless form (one frame, no history). ``FramePipeline`` is the same
-computation with trackers (lane boundaries, lead vehicle) and the lane memory of the steering; the
-supervisor and ``HoughLaneSteering`` share one pipeline so a frame is analysed once.
+computation with trackers (lane boundaries, lead vehicle) and the lane memory of the steering; a
+supervisor wrapping ``HoughLaneSteering`` analyses each frame once with the steering's pipeline and
+hands that analysis to the steering (``perception.FrameSteering``).
 Frames are analysed at a fixed working width (``lanes.WORK_WIDTH_PX``); results in pixels are
 reported in the frame's own pixels.
 """
@@ -20,7 +21,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.policy import Lead
+from fearguard.observation import Lead
 from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
 from fearguard.vision.exposure import Exposure, road_exposure
 from fearguard.vision.lane_tracker import LaneTracker
@@ -87,19 +88,25 @@ def _as_bgr(frame: np.ndarray) -> np.ndarray:
 
 
 class FramePipeline:
-    """Stateful frame analysis: lane and lead trackers, lane memory; caches the last frame's result."""
+    """Stateful frame analysis: lane and lead trackers, lane memory. Every call analyses its frame afresh.
 
-    def __init__(self, camera: CameraModel | None = None, fps: float = 20.0, qr: bool = True) -> None:
-        self.camera = camera
+    There is no cache: a caller that refills one buffer every frame (``cap.read(buf)``, ring buffers,
+    ``np.copyto``) gets that frame's measurements. The camera is fixed at construction.
+    """
+
+    def __init__(self, camera: CameraModel | None = None, fps: float = 20.0) -> None:
+        self._camera = camera
         self.period_s = 1.0 / fps if fps > 0 else 0.05
-        self.qr = qr
         self.lanes = LaneTracker()
         self.leads = LeadTracker()
         self.memory = LaneMemory()
         self._frames = 0
-        self._last_frame: np.ndarray | None = None  # the array the cached result belongs to
-        self._last_result: FrameAnalysis | None = None
         self._confidences: deque[float] = deque(maxlen=CONFIDENCE_MEDIAN_FRAMES)
+
+    @property
+    def camera(self) -> CameraModel | None:
+        """The camera model every frame is analysed with (None: an uncalibrated default for the frame size)."""
+        return self._camera
 
     def steady_confidence(self, confidence: float) -> float:
         """Median of the last CONFIDENCE_MEDIAN_FRAMES confidences: one odd frame neither alarms nor reassures."""
@@ -107,19 +114,25 @@ class FramePipeline:
         return float(np.median(self._confidences))
 
     def reset(self) -> None:
-        self.__init__(self.camera, 1.0 / self.period_s, self.qr)  # type: ignore[misc]
+        """Forget the trackers, the lane memory and the frame count (the camera stays)."""
+        self.lanes = LaneTracker()
+        self.leads = LeadTracker()
+        self.memory = LaneMemory()
+        self._frames = 0
+        self._confidences.clear()
 
-    def process(self, frame: object, t_s: float | None = None, lead_box: LeadBox | None = None) -> FrameAnalysis:
-        """Analyse a frame (once: the same array object again returns the cached result)."""
-        if self._last_result is not None and self._last_frame is frame:
-            return self._last_result
+    def process(
+        self, frame: object, t_s: float | None = None, lead_box: LeadBox | None = None, *, scan_qr: bool = False
+    ) -> FrameAnalysis:
+        """Analyse one frame at time t_s (None: the frame count × the period).
+
+        ``scan_qr``: look for QR boards — on every QR_EVERY_N_FRAMES-th frame analysed (the caller that
+        needs payloads, perception on a car with QR localisation, asks; the steering alone does not).
+        """
         self._frames += 1
         t = t_s if t_s is not None and math.isfinite(t_s) else self._frames * self.period_s
-        scan_qr = self.qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
-        result = _analyze(frame, self.camera, self, t, lead_box, scan_qr)
-        self._last_frame = frame if isinstance(frame, np.ndarray) else None
-        self._last_result = result
-        return result
+        qr = scan_qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
+        return _analyze(frame, self._camera, self, t, lead_box, qr)
 
 
 def analyze_frame(frame_bgr: object, camera: CameraModel | None = None) -> FrameAnalysis:

@@ -1,8 +1,9 @@
 """HoughLaneSteering: the baseline lane-geometry steering function (frame → degrees, + = left).
 
 The classic pipeline of the field (Hough lanes, Kalman-tracked boundaries, aim at the lane centre);
-users wrap it with ``FearGuard`` like any other estimator. A FearGuard that wraps it shares its frame
-pipeline, so each frame is analysed once for both the cues and the steering.
+users wrap it with ``FearGuard`` like any other estimator. It is a ``perception.FrameSteering``: a
+FearGuard that wraps it analyses each frame once with its pipeline and asks ``steer_from`` for the
+angle of that same analysis, so the cues and the steering always describe the same frame.
 """
 
 from __future__ import annotations
@@ -19,15 +20,19 @@ class HoughLaneSteering:
     """
 
     def __init__(self, camera: CameraModel | None = None, fps: float = 20.0) -> None:
-        self.pipeline = FramePipeline(camera, fps)
+        self._pipeline = FramePipeline(camera, fps)
+
+    @property
+    def pipeline(self) -> FramePipeline:
+        """The frame analysis this steering reads (its camera, trackers and lane memory)."""
+        return self._pipeline
 
     def __call__(self, frame: object) -> float:
-        analysis = self.pipeline.process(frame)
-        return self.steering_from(analysis)
+        return self.steer_from(self._pipeline.process(frame))
 
-    @staticmethod
-    def steering_from(analysis: FrameAnalysis) -> float:
+    def steer_from(self, analysis: FrameAnalysis) -> float:
+        """The angle for a frame this steering's pipeline has analysed."""
         return analysis.steering_deg if analysis.steering_deg is not None else 0.0
 
     def reset(self) -> None:
-        self.pipeline.reset()
+        self._pipeline.reset()

@@ -12,14 +12,13 @@ from ground-plane geometry (needs the camera's mounting height) — or, when fus
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import cv2
 import numpy as np
 from filterpy.kalman import KalmanFilter
 
 from fearguard.camera import CameraModel
-from fearguard.policy import Lead
+from fearguard.observation import Lead, LeadBox  # plain values (LeadBox re-exported here for existing imports)
 from fearguard.vision.lanes import LaneLine, RoadRegion
 
 DARK_RATIO = 0.55  # [-] underside pixels are darker than this share of the road reference
@@ -35,27 +34,6 @@ TAIL_LIGHT_SHARE = 0.004  # [-] share of the box that must be tail-light red (tw
 CONFIRM_HITS = 2  # [frames] detections in a row before a new lead is reported
 LOST_AFTER_S = 0.5  # [s] a track coasts this long without detections
 GATE_CHI2 = 16.3  # [-] chi-square, 3 dof, p = 0.001
-
-
-@dataclass(frozen=True)
-class LeadBox:
-    """A vehicle's box in image pixels: left, top, width, height (as detectors report it)."""
-
-    x_px: float
-    y_px: float
-    w_px: float
-    h_px: float
-
-    @property
-    def usable(self) -> bool:
-        vals = (self.x_px, self.y_px, self.w_px, self.h_px)
-        return all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in vals) and self.w_px > 0 < self.h_px
-
-    def scaled(self, factor: float) -> LeadBox:
-        return LeadBox(self.x_px * factor, self.y_px * factor, self.w_px * factor, self.h_px * factor)
-
-    def as_int(self) -> tuple[int, int, int, int]:
-        return int(self.x_px), int(self.y_px), math.ceil(self.w_px), math.ceil(self.h_px)
 
 
 def lead_from_box(box: LeadBox, camera: CameraModel) -> Lead:

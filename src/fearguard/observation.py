@@ -1,0 +1,68 @@
+"""The plain values that enter the supervisor: one instant's Observation, and the vehicle ahead.
+
+These sit at the bottom of the package (they import only ``cues``), so every layer can use them:
+vision produces a ``Lead`` from a ``LeadBox``, perception reads an ``Observation``, policy follows a
+``Lead`` — and none of them has to import another layer to name its input (docs/architecture.md).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from fearguard.cues import Cues, finite_number
+
+
+@dataclass(frozen=True)
+class Lead:
+    """The vehicle ahead in the ego lane: bearing (deg, + = left) and range if known (m)."""
+
+    bearing_deg: float
+    range_m: float | None = None
+
+    @property
+    def usable(self) -> bool:
+        """A lead can be followed when its bearing is a finite number (a range is optional)."""
+        return finite_number(self.bearing_deg) is not None
+
+    @property
+    def usable_range_m(self) -> float | None:
+        r = finite_number(self.range_m)
+        return r if r is not None and r >= 0.0 else None
+
+
+@dataclass(frozen=True)
+class LeadBox:
+    """A vehicle's box in image pixels: left, top, width, height (as detectors report it)."""
+
+    x_px: float
+    y_px: float
+    w_px: float
+    h_px: float
+
+    @property
+    def usable(self) -> bool:
+        vals = (self.x_px, self.y_px, self.w_px, self.h_px)
+        return all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in vals) and self.w_px > 0 < self.h_px
+
+    def scaled(self, factor: float) -> LeadBox:
+        return LeadBox(self.x_px * factor, self.y_px * factor, self.w_px * factor, self.h_px * factor)
+
+    def as_int(self) -> tuple[int, int, int, int]:
+        return int(self.x_px), int(self.y_px), math.ceil(self.w_px), math.ceil(self.h_px)
+
+
+@dataclass(frozen=True)
+class Observation:
+    """What the car knows at one instant. Give ``cues`` to skip perception (cue-level use)."""
+
+    t_s: float
+    speed_mps: float = 0.0
+    frame: Any = None
+    cues: Cues | None = None
+    ultrasonic_range_m: float | None = None
+    odometer_m: float | None = None
+    qr_payload: str | None = None
+    lead: Lead | LeadBox | None = None  # a Lead, or a box from an external detector (frame pixels)
+    ultrasonic_echo_s: float | None = None  # raw HC-SR04 echo time, used when ultrasonic_range_m is None
