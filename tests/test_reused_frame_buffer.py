@@ -12,7 +12,7 @@ import fearguard as fg
 from fearguard.sim.scenario import load_scenario
 from fearguard.sim.suite import BUNDLED
 from fearguard.sim.world import World
-from fearguard.vision.frame import CONFIDENCE_MEDIAN_FRAMES
+from fearguard.vision.trackers import CONFIDENCE_MEDIAN_FRAMES
 
 GOOD_FRAMES = 40  # 2 s of a clear straight road at 20 Hz
 BLACK_FRAMES = 20

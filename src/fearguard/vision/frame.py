@@ -1,19 +1,23 @@
 """One camera frame → the vision cues, the lead vehicle, QR payloads and the baseline steering angle.
 
-``analyze_frame`` is the stateless form (one frame, no history). ``FramePipeline`` is the same
-computation with trackers (lane boundaries, lead vehicle) and the lane memory of the steering; a
-supervisor wrapping ``HoughLaneSteering`` analyses each frame once with the steering's pipeline and
-hands that analysis to the steering (``perception.FrameSteering``).
-Frames are analysed at a fixed working width (``lanes.WORK_WIDTH_PX``); results in pixels are
-reported in the frame's own pixels.
+The analysis is six small stages, each a function over plain values:
+
+    prepare (BGR, undistort, working size, road region, grey/HLS, exposure)
+      → lanes (detect, track) → lead and occlusion → confidence → QR → steering
+
+``analyze_frame`` is the stateless form (one frame, no history); ``FramePipeline`` is the stateful form.
+Both run the same stages; they differ only in the ``Trackers`` they hand them (``vision/trackers.py``:
+Kalman tracks, lane memory and the confidence median, or pass-through stand-ins). A supervisor wrapping
+``HoughLaneSteering`` analyses each frame once with the steering's pipeline and hands that analysis to
+the steering (``perception.FrameSteering``). Frames are analysed at a fixed working width
+(``lanes.WORK_WIDTH_PX``); results in pixels are reported in the frame's own pixels.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import lru_cache
 
@@ -21,19 +25,18 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.observation import Lead
+from fearguard.observation import Lead, LeadBox
 from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
 from fearguard.vision.exposure import Exposure, road_exposure
-from fearguard.vision.lane_tracker import LaneTracker
 from fearguard.vision.lanes import LaneLine, RoadRegion, detect_lanes, region_mask, road_region, work_size
-from fearguard.vision.lead import LeadBox, LeadTracker, detect_lead, lead_from_box
+from fearguard.vision.lead import detect_lead, lead_from_box
 from fearguard.vision.occlusion import default_lines, occlusion, road_reference
 from fearguard.vision.qr import detect_qr
-from fearguard.vision.steering import LaneMemory, aim_point_u, lookahead_row, steering_from_aim
+from fearguard.vision.steering import aim_point_u, lookahead_row, steering_from_aim
+from fearguard.vision.trackers import Trackers
 
 QR_EVERY_N_FRAMES = 3  # [frames] the pipeline scans for QR boards on every 3rd frame: a board stays in view for many
 # frames, staleness keeps a 0.15 s resolution at 20 Hz, and the scan (~1.8 ms, ~5.5 ms with a board) costs a third
-CONFIDENCE_MEDIAN_FRAMES = 3  # [frames] lane_confidence over time is the median of this many frames (50 ms lag at 20 Hz)
 MIN_FRAME_PX = 16  # [px] frames smaller than this on a side cannot show a road
 _NAN = float("nan")
 UNKNOWN_EXPOSURE = Exposure(_NAN, _NAN, _NAN)
@@ -76,50 +79,37 @@ def invalid_frame_reason(frame: object) -> str | None:
 
 def unknown_analysis(reason: str) -> FrameAnalysis:
     """The result for a frame that could not be analysed: every vision cue unknown (worst)."""
-    return FrameAnalysis(_NAN, _NAN, _NAN, None, (), None, reasons=(reason,))
-
-
-def _as_bgr(frame: np.ndarray) -> np.ndarray:
-    if frame.ndim == 2 or frame.shape[2] == 1:
-        return cv2.cvtColor(frame.reshape(frame.shape[:2]), cv2.COLOR_GRAY2BGR)
-    if frame.shape[2] == 4:
-        return cv2.cvtColor(frame, cv2.COLOR_BGRA2BGR)
-    return frame
+    return FrameAnalysis(lane_confidence=_NAN, brightness=_NAN, occlusion=_NAN, lead=None, qr_payloads=(), steering_deg=None,
+                         reasons=(reason,))
 
 
 class FramePipeline:
     """Stateful frame analysis: lane and lead trackers, lane memory. Every call analyses its frame afresh.
 
     There is no cache: a caller that refills one buffer every frame (``cap.read(buf)``, ring buffers,
-    ``np.copyto``) gets that frame's measurements. The camera is fixed at construction.
+    ``np.copyto``) gets that frame's measurements. The camera is fixed at construction. ``trackers``
+    (a factory, also used on reset) defaults to the tracking ones; ``Trackers.pass_through`` gives a
+    pipeline that agrees with ``analyze_frame`` frame by frame.
     """
 
-    def __init__(self, camera: CameraModel | None = None, fps: float = 20.0) -> None:
+    def __init__(
+        self, camera: CameraModel | None = None, fps: float = 20.0, *, trackers: Callable[[], Trackers] = Trackers.tracking
+    ) -> None:
         self._camera = camera
         self.period_s = 1.0 / fps if fps > 0 else 0.05
-        self.lanes = LaneTracker()
-        self.leads = LeadTracker()
-        self.memory = LaneMemory()
+        self._new_trackers = trackers
+        self.trackers = trackers()
         self._frames = 0
-        self._confidences: deque[float] = deque(maxlen=CONFIDENCE_MEDIAN_FRAMES)
 
     @property
     def camera(self) -> CameraModel | None:
         """The camera model every frame is analysed with (None: an uncalibrated default for the frame size)."""
         return self._camera
 
-    def steady_confidence(self, confidence: float) -> float:
-        """Median of the last CONFIDENCE_MEDIAN_FRAMES confidences: one odd frame neither alarms nor reassures."""
-        self._confidences.append(confidence)
-        return float(np.median(self._confidences))
-
     def reset(self) -> None:
         """Forget the trackers, the lane memory and the frame count (the camera stays)."""
-        self.lanes = LaneTracker()
-        self.leads = LeadTracker()
-        self.memory = LaneMemory()
+        self.trackers = self._new_trackers()
         self._frames = 0
-        self._confidences.clear()
 
     def process(
         self, frame: object, t_s: float | None = None, lead_box: LeadBox | None = None, *, scan_qr: bool = False
@@ -132,89 +122,158 @@ class FramePipeline:
         self._frames += 1
         t = t_s if t_s is not None and math.isfinite(t_s) else self._frames * self.period_s
         qr = scan_qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
-        return _analyze(frame, self._camera, self, t, lead_box, qr)
+        return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr)
 
 
 def analyze_frame(frame_bgr: object, camera: CameraModel | None = None) -> FrameAnalysis:
-    """One frame's stateless measurements (DESIGN.md): lane_confidence, brightness, occlusion, lead, qr_payloads, steering_deg."""
+    """One frame's stateless measurements (docs/architecture.md): lane_confidence, brightness, occlusion, lead, qr_payloads,
+    steering_deg."""
     try:
-        return _analyze(frame_bgr, camera, None, 0.0, None, True)
+        return _analyze(frame_bgr, camera, Trackers.pass_through(), 0.0, None, qr=True)
     except Exception as exc:  # a measurement must never take the caller down: unknown is the answer
         return unknown_analysis(f"frame analysis failed: {type(exc).__name__}: {exc}")
 
 
-def _analyze(
-    frame: object, camera: CameraModel | None, state: FramePipeline | None, t_s: float, lead_box: LeadBox | None, qr: bool
-) -> FrameAnalysis:
-    bad = invalid_frame_reason(frame)
-    if bad is not None:
-        return unknown_analysis(f"camera: {bad}: vision cues unknown (worst)")
-    assert isinstance(frame, np.ndarray)  # narrowed by invalid_frame_reason (for type checkers)
-    clock = time.perf_counter
-    t0 = clock()
+# -- the stages ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Prepared:
+    """A frame ready to measure: frame-size BGR (undistorted when calibrated), working-size grey and HLS on the road rows."""
+
+    bgr: np.ndarray  # frame pixels (QR is read at full resolution)
+    camera: CameraModel  # at the frame's size
+    scale: float  # frame pixels per working pixel
+    region: RoadRegion  # in working pixels
+    mask: np.ndarray  # the road region (read-only)
+    gray: np.ndarray
+    hls: np.ndarray
+    exposure: Exposure  # of the road region
+
+
+@dataclass(frozen=True)
+class Lanes:
+    """The ego lane's boundaries this frame: what to steer by and the evidence for the confidence."""
+
+    left: LaneLine | None  # detected, with the tracked geometry when tracking (or the coasting track)
+    right: LaneLine | None
+    seen_left: LaneLine | None  # the evidence: detections the tracker accepted (an outlier is a miss)
+    seen_right: LaneLine | None
+    agreement_left: float  # [0..1] detection vs the track's prediction (1 without a track)
+    agreement_right: float
+    features: np.ndarray  # marking pixels (working size)
+    aim_row_px: float  # the look-ahead row the steering aims at
+    lane_width_px: float  # lane width at that row (measured, remembered or the default)
+
+
+@dataclass(frozen=True)
+class LeadAndOcclusion:
+    """The vehicle ahead (box in frame pixels, bearing and range) and the hidden share of the expected markings."""
+
+    box: LeadBox | None
+    lead: Lead | None
+    occlusion: float
+    road_reference: float  # grey level of the road just ahead
+
+
+def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
+    """BGR at the frame's size (undistorted when a camera is given), then grey/HLS of the road rows at the working size."""
     bgr = _as_bgr(frame)
     fh, fw = bgr.shape[:2]
-    cam = (camera.scaled_to(fw, fh) if camera is not None else CameraModel.default(fw, fh))
+    cam = camera.scaled_to(fw, fh) if camera is not None else CameraModel.default(fw, fh)
     if camera is not None:
         bgr = cam.undistort(bgr)
     ww, wh = work_size(fw, fh)
     work = bgr if (ww, wh) == (fw, fh) else cv2.resize(bgr, (ww, wh), interpolation=cv2.INTER_AREA)
-    scale = fw / ww
     region, mask = _region_and_mask(ww, wh, camera)
     gray, hls = _band_conversions(work, region)
-    t1 = clock()
-    exposure = road_exposure(gray, mask)
-    priors = state.lanes.current(region) if state is not None else (None, None)
-    det = detect_lanes(hls, region, mask, priors)
-    t2 = clock()
-    left, right = det.left, det.right
-    agree_l = agree_r = 1.0
-    memory = state.memory if state is not None else LaneMemory()
+    return Prepared(bgr=bgr, camera=cam, scale=fw / ww, region=region, mask=mask, gray=gray, hls=hls,
+                    exposure=road_exposure(gray, mask))
+
+
+def find_lanes(p: Prepared, trackers: Trackers, t_s: float) -> Lanes:
+    """Detect both boundaries (the tracks as priors), remember the lane width, fold the detections into the tracks."""
+    region = p.region
+    det = detect_lanes(p.hls, region, p.mask, trackers.lanes.current(region))
     v_aim = lookahead_row(region)
-    width_px = memory.remember_width(left, right, v_aim, ww)
-    seen_left, seen_right = det.left, det.right  # the evidence: detections the tracker accepted (an outlier is a miss)
-    if state is not None:
-        tracked = state.lanes.update(t_s, region, left, right)
-        seen_left = det.left if tracked.left_accepted else None
-        seen_right = det.right if tracked.right_accepted else None
-        agree_l = agreement(left, tracked.predicted_left, region, width_px)
-        agree_r = agreement(right, tracked.predicted_right, region, width_px)
-        left = left if tracked.left is None or left is None else _with_track(left, tracked.left)
-        right = right if tracked.right is None or right is None else _with_track(right, tracked.right)
-        if left is None and tracked.left is not None and right is not None:
-            left = tracked.left  # coasting track of a boundary missed this frame (keeps the aim point steady)
-        if right is None and tracked.right is not None and left is not None:
-            right = tracked.right
+    width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
+    tracked = trackers.lanes.update(t_s, region, det.left, det.right)
+    left = det.left if tracked.left is None or det.left is None else _with_track(det.left, tracked.left)
+    right = det.right if tracked.right is None or det.right is None else _with_track(det.right, tracked.right)
+    if left is None and tracked.left is not None and right is not None:
+        left = tracked.left  # coasting track of a boundary missed this frame (keeps the aim point steady)
+    if right is None and tracked.right is not None and left is not None:
+        right = tracked.right
+    return Lanes(
+        left=left, right=right,
+        seen_left=det.left if tracked.left_accepted else None, seen_right=det.right if tracked.right_accepted else None,
+        agreement_left=agreement(det.left, tracked.predicted_left, region, width_px),
+        agreement_right=agreement(det.right, tracked.predicted_right, region, width_px),
+        features=det.features, aim_row_px=v_aim, lane_width_px=width_px,
+    )
+
+
+def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: float, given: LeadBox | None) -> LeadAndOcclusion:
+    """The lead box (a usable ``given`` one from an external detector, else detected and tracked) and the occlusion."""
+    expected_l, expected_r = default_lines(p.region)
+    expected_l, expected_r = lanes.left or expected_l, lanes.right or expected_r
+    reference = road_reference(p.gray, p.region, expected_l, expected_r)
+    external = given if isinstance(given, LeadBox) and given.usable else None
+    box = external
+    if external is None:
+        found = detect_lead(p.gray, p.hls, p.region, expected_l, expected_r, reference)
+        box = trackers.leads.update(t_s, found.scaled(p.scale) if found is not None else None)
+    boxes = (box.scaled(1.0 / p.scale).as_int(),) if box is not None else ()
+    occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, reference, boxes)
+    lead = lead_from_box(box, p.camera) if box is not None else None
+    return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference)
+
+
+def judge_confidence(p: Prepared, lanes: Lanes, occlusion_share: float) -> LaneEvidence:
+    """lane_confidence of this frame from the accepted detections, their agreement, occlusion and clipped pixels."""
+    clipped = p.exposure.saturated_share + p.exposure.black_share
+    return lane_confidence(lanes.seen_left, lanes.seen_right, p.region, lanes.agreement_left, lanes.agreement_right,
+                           occlusion_share, clipped)
+
+
+def read_qr(p: Prepared) -> tuple[str, ...]:
+    """Payloads of the QR boards in the frame (full resolution)."""
+    return tuple(m.payload for m in detect_qr(p.bgr))
+
+
+def steer(p: Prepared, lanes: Lanes, trackers: Trackers) -> float | None:
+    """Bearing of the lane centre at the look-ahead row; no boundary: the held angle (None without history)."""
+    u_aim = aim_point_u(lanes.left, lanes.right, lanes.aim_row_px, lanes.lane_width_px)
+    return trackers.memory.hold(steering_from_aim(u_aim, p.scale, p.camera) if u_aim is not None else None)
+
+
+def _analyze(
+    frame: object, camera: CameraModel | None, trackers: Trackers, t_s: float, lead_box: LeadBox | None, *, qr: bool
+) -> FrameAnalysis:
+    """The stages in order, each timed."""
+    bad = invalid_frame_reason(frame)
+    if bad is not None or not isinstance(frame, np.ndarray):
+        return unknown_analysis(f"camera: {bad}: vision cues unknown (worst)")
+    clock = time.perf_counter
+    t0 = clock()
+    p = prepare(frame, camera)
+    t1 = clock()
+    lanes = find_lanes(p, trackers, t_s)
+    t2 = clock()
+    seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box)
     t3 = clock()
-    exp_l, exp_r = default_lines(region)
-    exp_l, exp_r = left or exp_l, right or exp_r
-    reference = road_reference(gray, region, exp_l, exp_r)
-    box_work = detect_lead(gray, hls, region, exp_l, exp_r, reference)
-    detected_box = box_work.scaled(scale) if box_work is not None else None
-    external = lead_box if isinstance(lead_box, LeadBox) and lead_box.usable else None
-    box = external or detected_box
-    if state is not None and external is None:
-        box = state.leads.update(t_s, detected_box)
-    boxes = (box.scaled(1.0 / scale).as_int(),) if box is not None else ()
-    occ = occlusion(gray, hls, det.features, region, exp_l, exp_r, reference, boxes)
-    lead = lead_from_box(box, cam) if box is not None else None
-    clipped = exposure.saturated_share + exposure.black_share
-    evidence = lane_confidence(seen_left, seen_right, region, agree_l, agree_r, occ, clipped)
+    evidence = judge_confidence(p, lanes, seen.occlusion)
+    confidence = trackers.confidence.update(evidence.confidence)
     t4 = clock()
-    payloads = tuple(m.payload for m in detect_qr(bgr)) if qr else ()
+    payloads = read_qr(p) if qr else ()
     t5 = clock()
-    u_aim = aim_point_u(left, right, v_aim, width_px)
-    steering = steering_from_aim(u_aim, scale, cam) if u_aim is not None else memory.last_steering_deg
-    memory.last_steering_deg = steering
-    reasons = []
-    if not math.isfinite(exposure.brightness):
-        reasons.append("camera: road region empty: brightness unknown")
-    timings = {"prepare": (t1 - t0) * 1e3, "lanes": (t2 - t1) * 1e3, "confidence": (t3 - t2) * 1e3,
-               "lead_occlusion": (t4 - t3) * 1e3, "qr": (t5 - t4) * 1e3, "steering": (clock() - t5) * 1e3}
-    confidence = evidence.confidence if state is None else state.steady_confidence(evidence.confidence)
+    steering = steer(p, lanes, trackers)
+    reasons = () if math.isfinite(p.exposure.brightness) else ("camera: road region empty: brightness unknown",)
+    timings = {"prepare": (t1 - t0) * 1e3, "lanes": (t2 - t1) * 1e3, "lead_occlusion": (t3 - t2) * 1e3,
+               "confidence": (t4 - t3) * 1e3, "qr": (t5 - t4) * 1e3, "steering": (clock() - t5) * 1e3}
     return FrameAnalysis(
-        confidence, exposure.brightness, occ, lead, payloads, steering, exposure, evidence, left, right, region,
-        scale, box, reference, tuple(reasons), timings,
+        lane_confidence=confidence, brightness=p.exposure.brightness, occlusion=seen.occlusion, lead=seen.lead,
+        qr_payloads=payloads, steering_deg=steering, exposure=p.exposure, evidence=evidence, left=lanes.left,
+        right=lanes.right, region=p.region, scale=p.scale, lead_box=seen.box, road_reference=seen.road_reference,
+        reasons=reasons, timings_ms=timings,
     )
 
 
@@ -225,6 +284,14 @@ def _region_and_mask(width_px: int, height_px: int, camera: CameraModel | None) 
     mask = region_mask(region)
     mask.flags.writeable = False
     return region, mask
+
+
+def _as_bgr(frame: np.ndarray) -> np.ndarray:
+    if frame.ndim == 2 or frame.shape[2] == 1:
+        return cv2.cvtColor(frame.reshape(frame.shape[:2]), cv2.COLOR_GRAY2BGR)
+    if frame.shape[2] == 4:
+        return cv2.cvtColor(frame, cv2.COLOR_BGRA2BGR)
+    return frame
 
 
 def _band_conversions(work: np.ndarray, region: RoadRegion) -> tuple[np.ndarray, np.ndarray]:

@@ -52,3 +52,9 @@ class LaneMemory:
                 old = self.lane_width_px
                 self.lane_width_px = measured if old is None else (1 - WIDTH_MEMORY) * old + WIDTH_MEMORY * measured
         return self.lane_width_px if self.lane_width_px is not None else DEFAULT_LANE_WIDTH * width_px
+
+    def hold(self, steering_deg: float | None) -> float | None:
+        """This frame's angle, or the last one when no lane gave one (the review's rule); remembered."""
+        steering = steering_deg if steering_deg is not None else self.last_steering_deg
+        self.last_steering_deg = steering
+        return steering

@@ -1,0 +1,111 @@
+"""What the stateful frame analysis remembers between frames, and the pass-through stand-ins of the stateless form.
+
+``FramePipeline`` holds ``Trackers.tracking()``: the lane boundaries' Kalman tracks, the lead box's
+track, the steering's lane memory and the median of the last confidences. ``analyze_frame`` runs the
+very same stages with ``Trackers.pass_through()``: each stand-in hands this frame's measurement back
+unchanged and remembers nothing. So the two forms differ only in what they remember, and a pipeline
+built with pass-through trackers must agree with ``analyze_frame`` on every frame (tested, as
+filterpy tests its procedural form against ``KalmanFilter``).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from fearguard.observation import LeadBox
+from fearguard.vision.lane_tracker import LaneTracker, TrackedLanes
+from fearguard.vision.lanes import LaneLine, RoadRegion
+from fearguard.vision.lead import LeadTracker
+from fearguard.vision.steering import DEFAULT_LANE_WIDTH, LaneMemory
+
+CONFIDENCE_MEDIAN_FRAMES = 3  # [frames] lane_confidence over time is the median of this many frames (50 ms lag at 20 Hz)
+
+
+class LaneTracking(Protocol):
+    def current(self, region: RoadRegion) -> tuple[LaneLine | None, LaneLine | None]: ...
+
+    def update(self, t_s: float, region: RoadRegion, left: LaneLine | None, right: LaneLine | None) -> TrackedLanes: ...
+
+
+class LeadTracking(Protocol):
+    def update(self, t_s: float, box: LeadBox | None) -> LeadBox | None: ...
+
+
+class SteeringMemory(Protocol):
+    def remember_width(self, left: LaneLine | None, right: LaneLine | None, v_px: float, width_px: int) -> float: ...
+
+    def hold(self, steering_deg: float | None) -> float | None: ...
+
+
+class ConfidenceSmoothing(Protocol):
+    def update(self, confidence: float) -> float: ...
+
+
+class ConfidenceMedian:
+    """Median of the last CONFIDENCE_MEDIAN_FRAMES confidences: one odd frame neither alarms nor reassures."""
+
+    def __init__(self) -> None:
+        self._recent: deque[float] = deque(maxlen=CONFIDENCE_MEDIAN_FRAMES)
+
+    def update(self, confidence: float) -> float:
+        self._recent.append(confidence)
+        return float(np.median(self._recent))
+
+
+class PassThroughLanes:
+    """No lane tracks: no prior for the line choice, this frame's detections accepted as they are."""
+
+    def current(self, region: RoadRegion) -> tuple[LaneLine | None, LaneLine | None]:
+        return None, None
+
+    def update(self, t_s: float, region: RoadRegion, left: LaneLine | None, right: LaneLine | None) -> TrackedLanes:
+        return TrackedLanes(left=left, right=right, left_accepted=True, right_accepted=True, predicted_left=None, predicted_right=None)
+
+
+class PassThroughLead:
+    """No lead track: this frame's box (or None) as it is."""
+
+    def update(self, t_s: float, box: LeadBox | None) -> LeadBox | None:
+        return box
+
+
+class PassThroughMemory:
+    """No lane memory: the lane width is this frame's (or the default), and no previous angle is held."""
+
+    def remember_width(self, left: LaneLine | None, right: LaneLine | None, v_px: float, width_px: int) -> float:
+        measured = right.u_at(v_px) - left.u_at(v_px) if left is not None and right is not None else 0.0
+        return measured if measured > 0 else DEFAULT_LANE_WIDTH * width_px
+
+    def hold(self, steering_deg: float | None) -> float | None:
+        return steering_deg
+
+
+class PassThroughConfidence:
+    """No smoothing over time: this frame's confidence."""
+
+    def update(self, confidence: float) -> float:
+        return confidence
+
+
+@dataclass(frozen=True)
+class Trackers:
+    """The four memories of the frame analysis (each replaced, never reset in place, on a pipeline reset)."""
+
+    lanes: LaneTracking
+    leads: LeadTracking
+    memory: SteeringMemory
+    confidence: ConfidenceSmoothing
+
+    @classmethod
+    def tracking(cls) -> Trackers:
+        """The stateful form's: Kalman tracks, lane memory, confidence median."""
+        return cls(lanes=LaneTracker(), leads=LeadTracker(), memory=LaneMemory(), confidence=ConfidenceMedian())
+
+    @classmethod
+    def pass_through(cls) -> Trackers:
+        """The stateless form's: every stand-in hands this frame's measurement back and remembers nothing."""
+        return cls(lanes=PassThroughLanes(), leads=PassThroughLead(), memory=PassThroughMemory(), confidence=PassThroughConfidence())
