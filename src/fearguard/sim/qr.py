@@ -15,7 +15,6 @@ import numpy as np
 
 from fearguard.sim.scenario_values import QrBoardGroup, RoadSpec
 
-QUIET_MODULES = 2  # [modules] white border the encoder adds; the board's white frame adds as much again
 BOARD_MARGIN = 0.03  # [-] white frame around the code (beyond its quiet zone), share of the board side
 
 
