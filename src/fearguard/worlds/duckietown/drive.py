@@ -186,7 +186,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
                 x_m=truth.x_m, y_m=truth.y_m, yaw_rad=truth.yaw_rad, invalid_pose=truth.invalid_pose, collided=truth.collided,
                 obstacle_gap_m=truth.obstacle_gap_m, obstacle_present=present, tof_m=tof,
             )
-            analysis = guard.last_perception.analysis if guard is not None and guard.last_perception is not None else None
+            analysis = cmd.perceived.analysis if cmd is not None and cmd.perceived is not None else None
             recorder.frame(k, samples[-1].t_s, cmd, image=frame, analysis=analysis, caption=f"v {truth.speed_mps:.2f} m/s",
                            speed_mps=truth.speed_mps, fields=fields)
             if on_step is not None:
