@@ -1,4 +1,4 @@
-"""The public surface DESIGN.md promises: names outside tests call exactly."""
+"""The public surface docs/architecture.md promises: names outside tests call exactly."""
 
 from __future__ import annotations
 

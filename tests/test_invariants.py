@@ -1,4 +1,4 @@
-"""The safety invariants of DESIGN.md, numbered as there, for every bundled rule file × every vehicle preset.
+"""The safety invariants of docs/architecture.md, numbered as there, for every bundled rule file × every vehicle preset.
 
 One source of truth: the strategies and the checkers are ``fearguard.testing``'s, the same a user runs
 for their own car (``supervisor_invariants``, ``fearguard verify``). The search is deterministic

@@ -1,7 +1,7 @@
 """The five risk cues: names, units, physical ranges and their worst values.
 
 A cue that is NaN, outside its physical range, or not a number is *unknown*, and unknown is the
-worst case (DESIGN.md). This module is the one place that decides what unknown means.
+worst case (docs/architecture.md, invariant 4). This module is the one place that decides what unknown means.
 """
 
 from __future__ import annotations

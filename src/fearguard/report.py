@@ -1,7 +1,7 @@
 """What a run leaves behind: the per-frame JSON Lines log, the summary, the plots.
 
 Shared by ``fearguard run`` (simulated scenarios) and ``fearguard replay`` (recorded drives). The log
-uses DESIGN.md's names: frame, t_s, the five cues, fear, fear_level, mode, strategy, speed_limit_mps,
+uses the contract's names (docs/architecture.md): frame, t_s, the five cues, fear, fear_level, mode, strategy, speed_limit_mps,
 steering_deg, reasons (plus extra fields a caller adds). Every line is flushed as it is written, so an
 interrupted run keeps every frame it processed. JSON has no NaN or infinity: NaN (unknown) is written
 as null, ±infinity as the strings "inf" / "-inf".
@@ -47,7 +47,7 @@ def from_json_number(value: Any) -> float:
 
 
 def command_record(frame: int, t_s: float, cmd: Command | None, **extra: Any) -> dict[str, Any]:
-    """One log line: the DESIGN.md fields from a Command (None: unsupervised run), plus extras."""
+    """One log line: the contract's fields (docs/architecture.md) from a Command (None: unsupervised run), plus extras."""
     record: dict[str, Any] = {"frame": frame, "t_s": t_s}
     if cmd is not None:
         record.update(zip(CUE_NAMES, cmd.cues.values(), strict=True))

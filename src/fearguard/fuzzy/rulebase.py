@@ -2,7 +2,7 @@
 
 Fear is a small hierarchy: each *group* is a Mamdani rule base (min/max, centroid) over a few cues,
 and fear = max over groups (fuzzy OR of the hazards). Max of monotone groups is monotone, which a
-single large Mamdani base with centroid is not in general (DESIGN.md, invariant 3); each group's
+single large Mamdani base with centroid is not in general (docs/architecture.md, invariant 3); each group's
 own monotonicity is proved by ``fearguard rules check``.
 """
 

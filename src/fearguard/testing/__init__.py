@@ -1,4 +1,4 @@
-"""fearguard.testing: prove the safety invariants of DESIGN.md for *your* car with hypothesis.
+"""fearguard.testing: prove the safety invariants of docs/architecture.md for *your* car with hypothesis.
 
 Needs the ``testing`` extra (``pip install fearguard[testing]``: hypothesis); ``import fearguard`` does not.
 

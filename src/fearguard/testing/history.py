@@ -11,7 +11,7 @@ File format (``save_case`` / ``load_case``), one JSON object per line:
     {"run": "drive", "frame": 0, "t_s": 0.0, "speed_mps": 1.0, "lane_confidence": 0.9, ..., "steer_output": 0.0,
      "fear": 0.08, "fear_level": "VERY_LOW", "mode": "NORMAL", "strategy": "PASS_THROUGH", ...}
 
-Every step line holds ``log.jsonl``'s names (DESIGN.md: ``frame``, ``t_s``, the five cues, ``fear``,
+Every step line holds ``log.jsonl``'s names (docs/architecture.md: ``frame``, ``t_s``, the five cues, ``fear``,
 ``fear_level``, ``mode``, ``strategy``, ``speed_limit_mps``, ``steering_deg``, ``reasons``) and the
 observation's fields (``speed_mps``, ``ultrasonic_range_m``, ``ultrasonic_echo_s``, ``odometer_m``, ``range_rate_mps``,
 ``qr_payload``, ``lead_bearing_deg``/``lead_range_m`` or ``lead_box_px``, ``frame_spec``). The cue fields

@@ -1,4 +1,4 @@
-"""One checker per numbered safety invariant of DESIGN.md, and the examples that exercise it.
+"""One checker per numbered safety invariant of docs/architecture.md, and the examples that exercise it.
 
 Each ``Invariant`` has ``cases(subject)``, a hypothesis strategy of ``Case`` values (histories sized by
 the subject's rules and vehicle), and ``check(subject, case)``, which runs the case through fresh
@@ -7,7 +7,7 @@ supervisors and returns None, or a sentence saying which frame breaks the invari
 smallest history that still breaks the invariant.
 
 An invariant whose behaviour is not in fearguard yet is ``pending`` (its reason says what is missing):
-its checker is written against DESIGN.md's contract and is reported as skipped, not passed.
+its checker is written against docs/architecture.md's contract and is reported as skipped, not passed.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ CheckFn = Callable[[Subject, Case], "str | None"]
 
 @dataclass(frozen=True)
 class Invariant:
-    """A numbered invariant: its title, DESIGN.md's words, the examples and the checker."""
+    """A numbered invariant: its title, docs/architecture.md's words, the examples and the checker."""
 
     number: str
     key: str
@@ -687,7 +687,7 @@ def check_stall(subject: Subject, case: Case) -> str | None:
     cfg = subject.rules.policy
     frames_n, age_s = (getattr(cfg, k, None) for k in WATCHDOG_KEYS)
     if frames_n is None or age_s is None:
-        frames_n, age_s = 10, 1.0  # DESIGN.md / openpilot: a message older than max(10 periods, 1 s)
+        frames_n, age_s = 10, 1.0  # docs/architecture.md / openpilot: a message older than max(10 periods, 1 s)
     for _, history in case.runs:
         r = run(subject, history)
         if r.raised:

@@ -2,7 +2,7 @@
 
 Every strategy takes the ``RuleBase`` (universes, the brightness band, which values are calm) and the
 ``VehicleLimits`` (speeds, steering limit, range-sensor limits) it is meant for, so the values are dense
-where that car's decisions change. Values come in three kinds, as DESIGN.md's cue table has them:
+where that car's decisions change. Values come in three kinds, as docs/architecture.md's cue table has them:
 
 - valid: inside the cue's physical range (``inf`` where it is a valid reading: nothing in range, never localised);
 - unknown: NaN, outside the range (negative, above 1 or 255, ``-inf``);

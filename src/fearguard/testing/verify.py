@@ -150,7 +150,7 @@ def _cut(inv: Invariant, subject: Subject, case: Case) -> Case:
 
 def verify(subject: Subject, examples: int = DEFAULT_EXAMPLES, seed: int = 0, only: Sequence[str] = (),
            on_outcome: Callable[[Outcome], None] | None = None) -> list[Outcome]:
-    """Search every invariant (or those in ``only``), in DESIGN.md's order."""
+    """Search every invariant (or those in ``only``), in docs/architecture.md's order."""
     chosen = [inv for inv in INVARIANTS if not only or inv.key in only or inv.number in only]
     outcomes = []
     for inv in chosen:

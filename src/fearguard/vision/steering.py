@@ -1,4 +1,4 @@
-"""Baseline steering from the lane geometry, and HoughLaneSteering: a steering function users can wrap.
+"""Baseline steering from the lane geometry: the aim point, its bearing, and the lane memory between frames.
 
 The lane centre at a look-ahead row (``LOOKAHEAD`` of the road region from its top) is the aim point;
 the steering angle is its bearing through the camera model (deg, + = left): the direction a
