@@ -12,13 +12,24 @@ import textwrap
 from pathlib import Path
 
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import fearguard as fg
 from fearguard.cli import main
 from fearguard.cues import CUE_NAMES
-from fearguard.testing import INVARIANTS, Case, FrameSpec, Step, Subject, histories, load_case, save_case, unknown_values
+from fearguard.testing import (
+    INVARIANTS,
+    Case,
+    FrameSpec,
+    Step,
+    Subject,
+    histories,
+    load_case,
+    observations,
+    save_case,
+    unknown_values,
+)
 from fearguard.testing.frames import frame_pixels
 from fearguard.testing.history import step_record
 from fearguard.testing.subject import run
@@ -93,6 +104,7 @@ def test_a_car_that_cannot_stop_within_its_sensor_range_fails_safe_distance(tmp_
     (["--rules", "nothing_here.toml"], "no such file"),
     (["--steer", "no_such_module_xyz:steer"], "cannot import 'no_such_module_xyz'"),
     (["--steer", "math"], "expected module:function"),
+    (["--only", "2,speling"], "--only speling: no such invariant"),
 ])
 def test_a_bad_file_is_rejected_with_exit_2(tmp_path, capsys, monkeypatch, args, says) -> None:
     monkeypatch.chdir(tmp_path)
@@ -164,3 +176,10 @@ def test_the_three_line_user_test_runs_in_a_fresh_folder(tmp_path) -> None:
     assert done.returncode == 0, done.stdout + done.stderr
     pending = sum(1 for inv in INVARIANTS if inv.pending)
     assert f"{len(INVARIANTS) - pending} passed" in done.stdout and (f"{pending} skipped" in done.stdout or not pending), done.stdout
+
+
+@settings(max_examples=25)
+@given(observations(level="frame"))
+def test_any_single_observation_gets_a_safe_command(obs) -> None:
+    cmd = fg.FearGuard(lambda frame: 0.0, vehicle=fg.VehicleLimits()).step(obs)
+    assert 0.0 <= cmd.speed_limit_mps <= fg.VehicleLimits().max_speed_mps and cmd.reasons

@@ -21,7 +21,7 @@ from hypothesis.errors import HypothesisWarning, NoSuchExample
 import fearguard as fg
 from fearguard.testing.history import Case, load_case, save_case
 from fearguard.testing.invariants import INVARIANTS, Invariant, invariant
-from fearguard.testing.subject import Subject, run
+from fearguard.testing.subject import SetupError, Subject, run
 
 DEFAULT_EXAMPLES = 100  # [cases] per invariant
 
@@ -151,14 +151,23 @@ def _cut(inv: Invariant, subject: Subject, case: Case) -> Case:
 def verify(subject: Subject, examples: int = DEFAULT_EXAMPLES, seed: int = 0, only: Sequence[str] = (),
            on_outcome: Callable[[Outcome], None] | None = None) -> list[Outcome]:
     """Search every invariant (or those in ``only``), in docs/architecture.md's order."""
-    chosen = [inv for inv in INVARIANTS if not only or inv.key in only or inv.number in only]
     outcomes = []
-    for inv in chosen:
+    for inv in chosen(only):
         outcome = find_counterexample(inv, subject, examples, seed)
         outcomes.append(outcome)
         if on_outcome is not None:
             on_outcome(outcome)
     return outcomes
+
+
+def chosen(only: Sequence[str] = ()) -> list[Invariant]:
+    """The invariants named in ``only`` by key or number (all when empty); an unknown name is a SetupError."""
+    names = {n for inv in INVARIANTS for n in (inv.key, inv.number)}
+    unknown = [k for k in only if k not in names]
+    if unknown:
+        raise SetupError(f"--only {','.join(unknown)}: no such invariant; known: {', '.join(inv.key for inv in INVARIANTS)} "
+                         f"or their numbers 1-10")
+    return [inv for inv in INVARIANTS if not only or inv.key in only or inv.number in only]
 
 
 def table(outcomes: Sequence[Outcome]) -> str:
@@ -186,26 +195,28 @@ def replay_counterexample(path: str | Path, rules: fg.RuleBase | str | None = No
 
 
 def supervisor_invariants(rules: fg.RuleBase | str | Path | None = None, vehicle: Any = None, steer: Any = None, *,
-                          examples: int = DEFAULT_EXAMPLES, seed: int = 0, only: Sequence[str] = (),
+                          examples: int | None = None, seed: int = 0, only: Sequence[str] = (),
                           counterexamples: str | Path = "fearguard-counterexamples") -> Callable[..., None]:
     """A pytest test, parametrized over every invariant, for one car: rules file, vehicle, steering function.
 
         from fearguard.testing import supervisor_invariants
         test_my_car = supervisor_invariants(rules="rules/my_car.toml", vehicle=MY_CAR, steer=my_pilot)
 
-    A failure shows the shrunk history and writes it to ``counterexamples/<invariant>.jsonl``
-    (replay it with ``fearguard verify --replay FILE``). Pending invariants are skipped with their reason.
+    ``examples`` (cases per invariant) defaults to the active hypothesis profile's ``max_examples``. A failure
+    shows the shrunk history and writes it to ``counterexamples/<invariant>.jsonl`` (replay it with
+    ``fearguard verify --replay FILE``). Pending invariants are skipped with their reason.
     """
     import pytest
 
-    chosen = [inv for inv in INVARIANTS if not only or inv.key in only or inv.number in only]
+    selected = chosen(only)
     state: dict[str, Subject] = {}
 
-    @pytest.mark.parametrize("invariant_key", [inv.key for inv in chosen], ids=[f"{inv.number}-{inv.key}" for inv in chosen])
+    @pytest.mark.parametrize("invariant_key", [inv.key for inv in selected], ids=[f"{inv.number}-{inv.key}" for inv in selected])
     def test_supervisor_invariant(invariant_key: str) -> None:
         if "subject" not in state:
             state["subject"] = Subject.of(rules, vehicle, steer)
-        outcome = find_counterexample(invariant_key, state["subject"], examples, seed)
+        n = examples if examples is not None else settings.default.max_examples
+        outcome = find_counterexample(invariant_key, state["subject"], n, seed)
         if outcome.skipped:
             pytest.skip(outcome.skipped)
         if outcome.counterexample is not None:
