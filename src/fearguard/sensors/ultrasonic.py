@@ -20,10 +20,9 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
-from filterpy.common import Q_discrete_white_noise
-from filterpy.kalman import KalmanFilter
 
 from fearguard.cues import real_number
+from fearguard.kalman import kalman_filter, white_noise_q
 
 HALF_SPEED_OF_SOUND_MPS = 171.5  # [m/s] 343 m/s at 20 °C, halved: the echo travels there and back (17150 cm/s)
 HC_SR04_MIN_RANGE_M = 0.15  # [m] 6 in (0.1524 m), lower end of the usable range reported for the HC-SR04
@@ -176,7 +175,7 @@ class UltrasonicFilter:
 
     def reset(self) -> None:
         """Forget everything (track, readings, clock): the next call starts as at power-up."""
-        self._kf = KalmanFilter(dim_x=2, dim_z=1)
+        self._kf = kalman_filter(dim_x=2, dim_z=1)
         self._kf.H = np.array([[1.0, 0.0]])
         self._kf.R = np.array([[self.measurement_std_m**2]])
         self._track = _Track.NONE
@@ -281,7 +280,7 @@ class UltrasonicFilter:
     def _predict(self, t: float) -> None:
         dt = t - self._kf_t_s
         self._kf.F = np.array([[1.0, dt], [0.0, 1.0]])
-        self._kf.Q = Q_discrete_white_noise(dim=2, dt=dt, var=self.accel_std_mps2**2)
+        self._kf.Q = white_noise_q(dim=2, dt=dt, var=self.accel_std_mps2**2)
         self._kf.predict()
         self._kf_t_s = t
 

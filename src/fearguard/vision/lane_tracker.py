@@ -11,11 +11,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from filterpy.kalman import KalmanFilter
 
+from fearguard.kalman import kalman_filter
 from fearguard.vision.lanes import LaneLine, RoadRegion
+
+if TYPE_CHECKING:
+    from filterpy.kalman import KalmanFilter
 
 MEASUREMENT_STD = 0.012  # [-] of the width: pixel noise of a detected boundary's end point
 ACCEL_STD = 0.6  # [-] of the width per s²: how fast a boundary may move in the image (curves, steering)
@@ -35,7 +39,7 @@ class BoundaryTrack:
         self.outliers = 0
 
     def _new_filter(self, z: np.ndarray) -> KalmanFilter:
-        kf = KalmanFilter(dim_x=4, dim_z=2)
+        kf = kalman_filter(dim_x=4, dim_z=2)
         kf.x = np.array([z[0], z[1], 0.0, 0.0])
         kf.H = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]])
         r = (MEASUREMENT_STD * self.width_px) ** 2

@@ -12,14 +12,18 @@ from ground-plane geometry (needs the camera's mounting height) — or, when fus
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
-from filterpy.kalman import KalmanFilter
 
 from fearguard.camera import CameraModel
+from fearguard.kalman import kalman_filter
 from fearguard.observation import Lead, LeadBox  # plain values (LeadBox re-exported here for existing imports)
 from fearguard.vision.lanes import LaneLine, RoadRegion
+
+if TYPE_CHECKING:
+    from filterpy.kalman import KalmanFilter
 
 DARK_RATIO = 0.55  # [-] underside pixels are darker than this share of the road reference
 WIDTH_RANGE = (0.3, 1.1)  # [-] blob width as a share of the lane width at its bottom row (a shadow across the road is wider)
@@ -138,7 +142,7 @@ class LeadTracker:
 
     @staticmethod
     def _new(z: np.ndarray) -> KalmanFilter:
-        kf = KalmanFilter(dim_x=6, dim_z=3)
+        kf = kalman_filter(dim_x=6, dim_z=3)
         kf.x = np.array([z[0], z[1], z[2], 0.0, 0.0, 0.0])
         kf.H = np.hstack([np.eye(3), np.zeros((3, 3))])
         scale = max(4.0, 0.1 * z[2])
