@@ -10,7 +10,6 @@ rule file: ``python -m fearguard.fuzzy.ship_terms`` (a test checks the file agai
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Sequence
 from functools import lru_cache
 from pathlib import Path
@@ -22,6 +21,8 @@ SHIPPED = Path(__file__).with_name("sampled_terms.npz")
 
 def term_key(shape: str, params: Sequence[float], grid: np.ndarray) -> str:
     """The key of one sampled term: shape, exact parameters, and a digest of the exact sample points."""
+    import hashlib  # its OpenSSL binding costs an import on the car only when the rules are loaded
+
     digest = hashlib.sha256(np.ascontiguousarray(grid, dtype=float).tobytes()).hexdigest()[:20]
     return f"{shape}({', '.join(repr(float(p)) for p in params)}) on {digest}"
 
