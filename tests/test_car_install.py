@@ -49,3 +49,9 @@ def test_plots_and_progress_bars_are_the_desktop_extra_and_test_installs_everyth
     extras = project["optional-dependencies"]
     assert any(d.startswith("matplotlib") for d in extras["desktop"]) and any(d.startswith("rich") for d in extras["desktop"])
     assert any("desktop" in d for d in extras["test"]) and any("testing" in d for d in extras["test"])
+
+
+def test_a_plot_without_the_desktop_extra_says_how_to_install_it(tmp_path):
+    done = run(f"from fearguard.cli import main\nprint('exit', main(['rules', 'plot', '--out', {str(tmp_path)!r}]))")
+    assert "exit 2" in done.stdout, done.stdout + done.stderr
+    assert "fearguard[desktop]" in done.stderr + done.stdout

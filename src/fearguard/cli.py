@@ -7,10 +7,12 @@ A thin layer: it parses arguments, calls the library, prints, and maps errors to
 from __future__ import annotations
 
 import argparse
+import importlib
 import math
 import sys
 import time
 from collections.abc import Sequence
+from typing import Any
 
 from fearguard.cues import CUE_NAMES, Cues
 from fearguard.errors import FearguardError
@@ -53,7 +55,7 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
-    from fearguard.plot import plot_rules
+    plot_rules = _desktop("fearguard.plot", "plots").plot_rules
 
     for path in plot_rules(load_rules(args.file), args.out):
         print(path)
@@ -118,10 +120,19 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _desktop(module: str, what: str) -> Any:
+    """A module of the desktop extra (matplotlib, rich), or a FearguardError saying how to install it."""
+    try:
+        return importlib.import_module(module)
+    except ModuleNotFoundError as exc:
+        raise FearguardError(f"{what} need {exc.name} ({exc}): pip install 'fearguard[desktop]'") from None
+
+
 class _Progress:
     """A rich progress bar with frames/s on stderr (quiet when stderr is not a terminal)."""
 
     def __init__(self, label: str) -> None:
+        _desktop("rich", "progress bars")
         from rich.console import Console
         from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
 
