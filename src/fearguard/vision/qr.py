@@ -13,7 +13,7 @@ Thorough path (stills, offline, a stopped car): whole-frame steps that run only 
 ArUco, plain, ½× (big frames), 2× (small frames), pad + 3× (bare codes without quiet zone), adaptive and
 Otsu binarisation — each followed by the refine cascade on its undecoded candidates.
 cv2.QRCodeDetector is never given a binarised image: OpenCV 5.0 aborts the process (heap corruption)
-on some (tests/test_qr.py names one). Measured counts and costs: docs/qr.md, benchmarks/bench_qr.py.
+on some (tests/vision/test_qr.py names one). Measured counts and costs: docs/qr.md, benchmarks/bench_qr.py.
 """
 
 from __future__ import annotations

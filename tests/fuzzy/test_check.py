@@ -5,12 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from tests.conftest import RULES_DIR
 
 import fearguard as fg
 from fearguard.cli import main
 from fearguard.fuzzy.check import check_rules
-
-from .conftest import RULES_DIR
 
 # the obvious 3×3 grid over lane_confidence × occlusion: Mamdani centroid makes it non-monotone
 GRID_GROUP = '''[groups.road_grid]

@@ -7,11 +7,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from tests.perturb import darkened, over_exposed, with_vehicle
 
 import fearguard as fg
 from fearguard.vision.frame import FramePipeline
-
-from .perturb import darkened, over_exposed, with_vehicle
 
 
 @pytest.fixture(scope="module")

@@ -10,13 +10,12 @@ import numpy as np
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
+from tests.scenario_text import scenario_from
 
 from fearguard.camera import CameraModel
 from fearguard.sim.projection import clip_near as _clip_near
 from fearguard.sim.scenario import Scenario
 from fearguard.sim.world import World
-
-from .scenario_text import scenario_from
 
 ROAD = """
 [road]

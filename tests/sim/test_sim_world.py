@@ -8,12 +8,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from tests.scenario_text import scenario_from
 
 from fearguard.sim.scenario import Scenario, load_scenario
 from fearguard.sim.traffic import traffic_speed_mps
 from fearguard.sim.world import World
-
-from .scenario_text import scenario_from
 
 STRAIGHT = """
 [[road.segments]]
@@ -157,7 +156,7 @@ def _run_hash(sc: Scenario, seed: int, steps: int = 50) -> str:
 
 
 def test_same_scenario_and_seed_give_byte_identical_frames_and_truth() -> None:
-    path = Path(__file__).resolve().parents[1] / "src" / "fearguard" / "scenarios" / "tree_shadows.toml"
+    path = Path(__file__).resolve().parents[2] / "src" / "fearguard" / "scenarios" / "tree_shadows.toml"
     sc = load_scenario(path)
     first = _run_hash(sc, 7)
     assert _run_hash(sc, 7) == first

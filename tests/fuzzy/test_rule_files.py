@@ -8,12 +8,11 @@ import sys
 from pathlib import Path
 
 import pytest
+from tests.conftest import RULES_DIR
 
 import fearguard as fg
 from fearguard.fuzzy.loader import bundled_rules_path
 from fearguard.fuzzy.rule_text import RuleSyntaxError, parse_rule
-
-from .conftest import RULES_DIR
 
 
 def test_bundled_rules_are_package_data_and_match_repo_copies() -> None:

@@ -14,7 +14,7 @@ from fearguard.sim.qr import payload, place_boards
 from fearguard.sim.scenario import Scenario, ScenarioError, load_scenario
 from fearguard.sim.schema import TomlSource
 
-LIBRARY = Path(__file__).resolve().parents[1] / "src" / "fearguard" / "scenarios"
+LIBRARY = Path(__file__).resolve().parents[2] / "src" / "fearguard" / "scenarios"
 REQUIRED = {"clear_straight", "s_curves", "tunnel_exit_glare", "night", "tree_shadows", "occluding_traffic_follow_lead",
             "unmarked_hill", "stationary_obstacle", "slower_lead", "lead_brakes_hard", "ccrs_road", "qr_markers_missing",
             "ultrasonic_dropout", "camera_blackout", "steering_fault"}
