@@ -15,7 +15,6 @@ import math
 import re
 import tomllib
 from collections.abc import Mapping
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -76,6 +75,8 @@ class _Source:
 
 def bundled_rules_path(name: str = "default.toml") -> Path:
     """Path of a rule file shipped inside the package (works after a non-editable install)."""
+    from importlib import resources  # tempfile, shutil, random…: not paid by ``import fearguard``
+
     return Path(str(resources.files("fearguard") / "rules" / name))
 
 
