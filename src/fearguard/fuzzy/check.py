@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens
-from fearguard.fuzzy.rulebase import Group, RuleBase
+from fearguard.fuzzy.model import Group
+from fearguard.fuzzy.rulebase import RuleBase
 
 GRID_BUDGET = 250_000  # [points] per group
 MONOTONE_TOL = 1e-9  # [-] fear may not fall by more than rounding
@@ -84,11 +85,11 @@ def check_group(rb: RuleBase, gi: int, group: Group, examples: int = 3) -> Group
     x[:, CUE_NAMES.index("obstacle_range_m")] = np.inf
     for name, m in zip(group.inputs, mesh, strict=True):
         x[:, CUE_NAMES.index(name)] = m.ravel()
-    engine = rb._engine
+    engine = rb.engine
     shape = mesh[0].shape
-    strength = engine.alpha_batch(x, gi)[0].max(axis=0).reshape(shape)  # type: ignore[attr-defined]
+    strength = engine.alpha_batch(x, gi)[0].max(axis=0).reshape(shape)
     uncovered = tuple(_describe(group.inputs, axes, tuple(int(i) for i in idx)) for idx in np.argwhere(strength <= 0.0)[:examples])
-    fear = engine.group_fears_batch(x, gi)[:, 0].reshape(shape)  # type: ignore[attr-defined]
+    fear = engine.group_fears_batch(x, gi)[:, 0].reshape(shape)
     violations: list[str] = []
     for k, name in enumerate(group.inputs):
         spec = CUE_SPECS[CUE_NAMES.index(name)]

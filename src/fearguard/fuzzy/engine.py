@@ -12,40 +12,62 @@ from __future__ import annotations
 
 from bisect import bisect_left
 from collections.abc import Callable
-from functools import reduce
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from fearguard.cues import BRIGHTNESS, CUE_NAMES, worst_filled
 from fearguard.fear import Cause, FearLevel, FearResult
+from fearguard.fuzzy.model import Rule, RuleSet
 from fearguard.fuzzy.rule_text import And, Is, Node, Not
-
-if TYPE_CHECKING:
-    from fearguard.fuzzy.rulebase import RuleBase
 
 CHUNK_ROWS = 256  # rows per block in evaluate_batch: keeps the (groups, rows, fear points) block in cache
 
 Memberships = list[Any]  # per cue index: memberships of its terms (floats or (N,) arrays), None if unused
 
 
-def _expression(node: Node, index: dict[tuple[str, str], tuple[int, int]], vector: bool) -> str:
-    """Python source of a rule's antecedent over ``m`` (memberships per cue index, per term index)."""
-    if isinstance(node, Is):
-        v, t = index[(node.variable, node.term)]
-        return f"m[{v}][{t}]"
-    if isinstance(node, Not):
-        return f"(1.0 - {_expression(node.operand, index, vector)})"
-    name = ("fmin" if vector else "min") if isinstance(node, And) else ("fmax" if vector else "max")
-    parts = [_expression(op, index, vector) for op in node.operands]
-    return reduce(lambda acc, p: f"{name}({acc}, {p})", parts)
+class _Straight:
+    """Straight-line Python source of rules' firing strengths over ``m`` (memberships per cue, per term).
 
+    One assignment per AND/OR/NOT step instead of one nested expression per rule: the source has no
+    nesting at all, so a rule of any width (hundreds of operands, chains of NOTs) compiles — a nested
+    expression stops at the Python parser's limit of 200 levels.
+    """
 
-def _compile(exprs: list[str], vector: bool) -> Callable[[Memberships], Any]:
-    """One function returning every rule's firing strength. Generated from our own parsed trees (only
-    indices, min/max and weights), it costs one call per frame instead of one per tree node."""
-    body = f"({', '.join(exprs)},)" if not vector else f"[{', '.join(exprs)}]"
-    return eval(f"lambda m: {body}", {"fmin": np.fmin, "fmax": np.fmax, "min": min, "max": max, "__builtins__": {}})
+    def __init__(self, index: dict[tuple[str, str], tuple[int, int]], vector: bool) -> None:
+        self.index, self.vector = index, vector
+        self.lines: list[str] = []
+
+    def _temp(self, expr: str) -> str:
+        name = f"t{len(self.lines)}"
+        self.lines.append(f"    {name} = {expr}")
+        return name
+
+    def value(self, node: Node) -> str:
+        """A name (or a membership lookup) holding the node's strength, after the lines it needs."""
+        if isinstance(node, Is):
+            v, t = self.index[(node.variable, node.term)]
+            return f"m[{v}][{t}]"
+        if isinstance(node, Not):
+            return self._temp(f"1.0 - {self.value(node.operand)}")
+        name = ("fmin" if self.vector else "min") if isinstance(node, And) else ("fmax" if self.vector else "max")
+        acc = self.value(node.operands[0])
+        for op in node.operands[1:]:
+            acc = self._temp(f"{name}({acc}, {self.value(op)})")
+        return acc
+
+    def compile(self, rules: list[Rule]) -> Callable[[Memberships], Any]:
+        """One function returning every rule's firing strength (weighted): one call per frame, not one per
+        tree node. Generated from our own parsed trees (only indices, min/max, 1 − x and weights)."""
+        outs = []
+        for r in rules:
+            out = self.value(r.antecedent)
+            outs.append(out if r.weight == 1.0 else self._temp(f"{out} * {r.weight!r}"))
+        ret = f"({', '.join(outs)},)" if not self.vector else f"[{', '.join(outs)}]"
+        source = "def strengths(m):\n" + "\n".join([*self.lines, f"    return {ret}"]) + "\n"
+        scope: dict[str, Any] = {"fmin": np.fmin, "fmax": np.fmax, "min": min, "max": max, "__builtins__": {}}
+        exec(compile(source, "<fearguard rules>", "exec"), scope)
+        return scope["strengths"]
 
 
 def centroid_weights(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -118,8 +140,8 @@ class _Sampled:
 class Engine:
     """The rule base compiled into index tables and closures."""
 
-    def __init__(self, rb: RuleBase) -> None:
-        self.rb = rb
+    def __init__(self, rb: RuleSet) -> None:
+        self.rules = rb
         self.inputs: list[tuple[int, _Sampled]] = []
         index: dict[tuple[str, str], tuple[int, int]] = {}
         for i, name in enumerate(CUE_NAMES):
@@ -133,17 +155,16 @@ class Engine:
         self.rule_texts = [r.text for _, r in rules]
         self.rule_slots = [(gi, int(r.level)) for gi, r in rules]  # where each strength accumulates
 
-        def weighted(r: Any, vector: bool) -> str:
-            expr = _expression(r.antecedent, index, vector)
-            return expr if r.weight == 1.0 else f"{expr} * {r.weight!r}"
-
-        self.strengths = _compile([weighted(r, False) for _, r in rules], vector=False)
-        self.strengths_batch = _compile([weighted(r, True) for _, r in rules], vector=True)
+        self.strengths = _Straight(index, vector=False).compile([r for _, r in rules])
+        self.strengths_batch = _Straight(index, vector=True).compile([r for _, r in rules])
         self.fear = _Sampled(rb.fear_variable.universe, list(rb.fear_variable.terms.values()))
         self.out_mf = self.fear.matrix
         # each level's support as a slice: the batch path only touches the points a level can raise
         self.supports = [slice(int(np.flatnonzero(mf > 0)[0]), int(np.flatnonzero(mf > 0)[-1]) + 1) for mf in self.out_mf]
         self.centroid_w = np.column_stack(centroid_weights(rb.fear_variable.universe))  # (points, [area, moment])
+        area_w, moment_w = self.centroid_w.T
+        # fear when only that level fires fully: the centroid of each level's term
+        self.level_anchors = np.array([float(mf @ moment_w) / float(mf @ area_w) for mf in self.out_mf])
         mf = self.out_mf
         self.closed_form = int((mf > 0).sum(axis=0).max()) <= 2  # at most two fear terms overlap anywhere
         self.level_sums = [_ClipSum(g, self.centroid_w) for g in mf]

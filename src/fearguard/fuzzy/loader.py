@@ -24,8 +24,9 @@ from fearguard.cues import CUE_NAMES, CUE_SPECS
 from fearguard.errors import RuleError
 from fearguard.fear import LEVEL_NAMES, Cause, FearLevel
 from fearguard.fuzzy.membership import SHAPES, universe_grid
+from fearguard.fuzzy.model import Group, Rule, Variable
 from fearguard.fuzzy.rule_text import RuleSyntaxError, atoms, parse_rule
-from fearguard.fuzzy.rulebase import Group, Rule, RuleBase, Variable
+from fearguard.fuzzy.rulebase import RuleBase
 from fearguard.policy import PolicyConfig
 
 MAX_UNIVERSE_POINTS = 100_001  # [-] a finer universe makes every evaluation slow for no accuracy

@@ -5,17 +5,15 @@ checked against (tests, benchmark). One ControlSystem per group; fear = max over
 from __future__ import annotations
 
 from functools import reduce
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from skfuzzy import control as ctrl
 
 from fearguard.cues import BRIGHTNESS, CUE_NAMES, unknown_mask, with_worst
 from fearguard.fear import LEVEL_NAMES
+from fearguard.fuzzy.model import Group, RuleSet
 from fearguard.fuzzy.rule_text import And, Is, Node, Not
-
-if TYPE_CHECKING:
-    from fearguard.fuzzy.rulebase import Group, RuleBase
 
 
 def _antecedent(node: Node, antecedents: dict[str, Any]) -> Any:
@@ -27,7 +25,7 @@ def _antecedent(node: Node, antecedents: dict[str, Any]) -> Any:
     return reduce((lambda a, b: a & b) if isinstance(node, And) else (lambda a, b: a | b), parts)
 
 
-def build_system(rb: RuleBase, group: Group) -> ctrl.ControlSystem:
+def build_system(rb: RuleSet, group: Group) -> ctrl.ControlSystem:
     """A scikit-fuzzy ControlSystem for one group, from the very same sampled terms."""
     antecedents: dict[str, Any] = {}
     for name in group.inputs:
@@ -45,15 +43,6 @@ def build_system(rb: RuleBase, group: Group) -> ctrl.ControlSystem:
     return ctrl.ControlSystem(rules)
 
 
-def _simulations(rb: RuleBase) -> list[ctrl.ControlSystemSimulation]:
-    """One reusable simulation per group, built on first use and kept on the rule base."""
-    cached = rb.__dict__.get("_reference_simulations")
-    if cached is None:
-        cached = [ctrl.ControlSystemSimulation(build_system(rb, g), cache=False) for g in rb.groups]
-        rb.__dict__["_reference_simulations"] = cached
-    return cached
-
-
 def _group_fear(sim: ctrl.ControlSystemSimulation, inputs: tuple[str, ...], x: np.ndarray) -> float:
     for name in inputs:
         sim.input[name] = float(x[CUE_NAMES.index(name)])
@@ -61,13 +50,20 @@ def _group_fear(sim: ctrl.ControlSystemSimulation, inputs: tuple[str, ...], x: n
     return float(sim.output.get("fear", 1.0))  # no rule fired: fear 1, as in the engine
 
 
-def reference_fear(rb: RuleBase, x_raw: np.ndarray) -> float:
-    """Fear computed by scikit-fuzzy; unknown cues replaced by their worst value first."""
-    candidates = [with_worst(x_raw, 0.0)]
-    if unknown_mask(x_raw)[BRIGHTNESS]:
-        candidates.append(with_worst(x_raw, 255.0))
-    return max(
-        _group_fear(sim, group.inputs, x)
-        for x in candidates
-        for sim, group in zip(_simulations(rb), rb.groups, strict=True)
-    )
+class Reference:
+    """One reusable scikit-fuzzy simulation per group of a rule set; fear = max over groups."""
+
+    def __init__(self, rules: RuleSet) -> None:
+        self.groups = rules.groups
+        self.simulations = [ctrl.ControlSystemSimulation(build_system(rules, g), cache=False) for g in rules.groups]
+
+    def fear(self, x_raw: np.ndarray) -> float:
+        """Fear computed by scikit-fuzzy; unknown cues replaced by their worst value first."""
+        candidates = [with_worst(x_raw, 0.0)]
+        if unknown_mask(x_raw)[BRIGHTNESS]:
+            candidates.append(with_worst(x_raw, 255.0))
+        return max(
+            _group_fear(sim, group.inputs, x)
+            for x in candidates
+            for sim, group in zip(self.simulations, self.groups, strict=True)
+        )

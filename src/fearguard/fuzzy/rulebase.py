@@ -1,54 +1,32 @@
-"""A loaded rule base: linguistic variables, rule groups, policy numbers, and how to evaluate them.
+"""A loaded rule base: where it came from, its plain values, its policy numbers, and its compiled engine.
 
 Fear is a small hierarchy: each *group* is a Mamdani rule base (min/max, centroid) over a few cues,
 and fear = max over groups (fuzzy OR of the hazards). Max of monotone groups is monotone, which a
 single large Mamdani base with centroid is not in general (docs/architecture.md, invariant 3); each group's
 own monotonicity is proved by ``fearguard rules check``.
+
+Layering (no import cycle): ``model`` (plain values) ← ``engine`` and ``reference`` ← ``rulebase``.
+The scikit-fuzzy reference is imported only when first asked for (it is slow and only for checking).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fearguard.cues import BRIGHTNESS, CUE_NAMES, Cues, unknown_mask, with_worst
-from fearguard.fear import Cause, FearLevel, FearResult
-from fearguard.fuzzy.rule_text import Node
+from fearguard.fear import FearLevel, FearResult
+from fearguard.fuzzy.engine import Engine
+from fearguard.fuzzy.model import Group, Rule, RuleSet, Variable
 from fearguard.policy import PolicyConfig
 
+if TYPE_CHECKING:
+    from fearguard.fuzzy.reference import Reference
 
-@dataclass(frozen=True, eq=False)
-class Variable:
-    """A linguistic variable: sample points of its universe and each term's sampled membership."""
-
-    name: str
-    universe: np.ndarray
-    terms: dict[str, np.ndarray]
-    shapes: dict[str, tuple[str, tuple[float, ...]]]
-    normal_band: tuple[float, float] | None = None
-
-
-@dataclass(frozen=True)
-class Rule:
-    text: str
-    group: str
-    antecedent: Node
-    level: FearLevel
-    weight: float
-    line: int | None
-
-
-@dataclass(frozen=True)
-class Group:
-    """One small Mamdani rule base grading one cause."""
-
-    name: str
-    cause: Cause
-    rules: tuple[Rule, ...]
-    inputs: tuple[str, ...]  # cue names its rules read, in CUE_NAMES order
+__all__ = ["Group", "Rule", "RuleBase", "Variable"]  # the values are re-exported for existing imports
 
 
 @dataclass(eq=False)
@@ -61,40 +39,43 @@ class RuleBase:
     fear_variable: Variable
     groups: tuple[Group, ...]
     policy: PolicyConfig
-    _engine: object = field(init=False, repr=False)
+    _engine: Engine = field(init=False, repr=False)
+    _reference: Reference | None = field(init=False, repr=False, default=None)
 
     def __post_init__(self) -> None:
-        from fearguard.fuzzy.engine import Engine
+        self._engine = Engine(self.model)
 
-        self._engine = Engine(self)
+    @property
+    def model(self) -> RuleSet:
+        """The plain values the engine and the reference compute from."""
+        return RuleSet(self.variables, self.fear_variable, self.groups)
+
+    @property
+    def engine(self) -> Engine:
+        """The compiled engine (per-group batch fears and activations, used by ``rules check``)."""
+        return self._engine
 
     @property
     def rules(self) -> tuple[Rule, ...]:
         return tuple(r for g in self.groups for r in g.rules)
 
-    @cached_property
+    @property
     def level_anchors(self) -> np.ndarray:
         """Fear the engine gives when only that level fires fully: the centroid of each level's term."""
-        from fearguard.fuzzy.engine import centroid_weights
-
-        area_w, moment_w = centroid_weights(self.fear_variable.universe)
-        return np.array([float(mf @ moment_w) / float(mf @ area_w) for mf in self.fear_variable.terms.values()])
+        return self._engine.level_anchors
 
     @property
     def brightness_band(self) -> tuple[float, float]:
-        var = self.variables.get("brightness")
-        if var is None or var.normal_band is None:
-            return (0.0, 255.0)
-        return var.normal_band
+        return self.model.brightness_band
 
     def level_of(self, fear: float) -> FearLevel:
         """The level whose fear term has the highest membership at this fear (ties: the higher)."""
-        return self._engine.level_of(fear)  # type: ignore[attr-defined]
+        return self._engine.level_of(fear)
 
     def evaluate(self, cues: Cues | Sequence[float] | np.ndarray) -> FearResult:
         """Fear of one cue vector, with the rules that fired; unknown cues count as their worst."""
         x = cues.values() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(5).tolist()
-        return self._engine.evaluate(x)  # type: ignore[attr-defined]
+        return self._engine.evaluate(x)
 
     def evaluate_batch(self, x: np.ndarray) -> np.ndarray:
         """Fear of N cue vectors, x: (N, 5) in CUE_NAMES order → (N,)."""
@@ -105,10 +86,10 @@ class RuleBase:
         x = np.asarray(x, dtype=float)
         if x.ndim != 2 or x.shape[1] != len(CUE_NAMES):
             raise ValueError(f"evaluate_batch needs an array of shape (N, 5) in the order {CUE_NAMES}, got {x.shape}")
-        dark = self._engine.group_fears_batch(with_worst(x, 0.0))  # type: ignore[attr-defined]
+        dark = self._engine.group_fears_batch(with_worst(x, 0.0))
         unknown_b = unknown_mask(x)[:, BRIGHTNESS]
         if unknown_b.any():
-            glare = self._engine.group_fears_batch(with_worst(x[unknown_b], 255.0))  # type: ignore[attr-defined]
+            glare = self._engine.group_fears_batch(with_worst(x[unknown_b], 255.0))
             rows = np.flatnonzero(unknown_b)
             pick = glare.max(axis=1) > dark[rows].max(axis=1)
             dark[rows[pick]] = glare[pick]
@@ -116,7 +97,9 @@ class RuleBase:
 
     def reference_fear(self, cues: Cues | Sequence[float] | np.ndarray) -> float:
         """The same rule base computed through scikit-fuzzy's ControlSystemSimulation (slow, exact)."""
-        from fearguard.fuzzy.reference import reference_fear
+        from fearguard.fuzzy.reference import Reference  # scikit-fuzzy's control system: loaded on first use
 
+        if self._reference is None:
+            self._reference = Reference(self.model)
         x = cues.as_array() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(5)
-        return reference_fear(self, x)
+        return self._reference.fear(x)
