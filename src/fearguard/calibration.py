@@ -19,7 +19,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.errors import FearguardError
+from fearguard.errors import CalibrationError
 
 DEFAULT_PATTERN = (9, 6)  # inner corners (columns, rows) of the usual OpenCV sample board
 MIN_BOARDS = 3  # boards needed for a calibration (OpenCV's docs ask for at least 10 for a good one)
@@ -30,10 +30,6 @@ SUBPIX_HALF_WINDOW_PX = (3, 11)  # [px] its bounds; 11 is the value of OpenCV's 
 IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png")
 _SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 1e-3)
 _CLASSIC_FLAGS = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
-
-
-class CalibrationError(FearguardError):
-    """Calibration cannot be done with these inputs (no images, bad pattern, too few boards, mixed sizes)."""
 
 
 @dataclass(frozen=True)

@@ -9,25 +9,18 @@ Used for undistortion, bearings of things in the image, and range to a point on 
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, fields, replace
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
 
-from fearguard.errors import FearguardError
+from fearguard.errors import CameraError
+from fearguard.reader import Table, number_list, read_toml
 
 DEFAULT_HFOV_DEG = 60.0  # [deg] horizontal field of view assumed when no calibration is given
-
-
-class CameraError(FearguardError):
-    """A camera file (TOML) is missing, malformed or physically impossible."""
-
-    def __init__(self, path: str | Path, where: str, problem: str) -> None:
-        self.path, self.where, self.problem = str(path), where, problem
-        super().__init__(f"{self.path}, {where}: {problem}")
 
 
 @dataclass(frozen=True)
@@ -155,50 +148,36 @@ def save_camera(camera: CameraModel, path: str | Path) -> None:
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
+_DISTORTION_COUNTS = (0, 4, 5, 8, 12, 14)  # [-] coefficient counts OpenCV's distortion models take
+_REQUIRED = ("width_px", "height_px", "fx_px", "fy_px", "cx_px", "cy_px")
+
+
 def load_camera(path: str | Path) -> CameraModel:
-    """Read ``camera.toml``; a wrong file raises CameraError naming the file and the key."""
-    path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise CameraError(path, "file", f"cannot read it ({exc.strerror}); run `fearguard calibrate` to make one") from exc
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise CameraError(path, "syntax", f"not valid TOML: {exc}") from exc
-    table = data.get(_TABLE)
-    if not isinstance(table, dict):
-        raise CameraError(path, f"[{_TABLE}]", "missing table; expected [camera] with width_px, height_px, fx_px, ...")
-    known = {f.name: f for f in fields(CameraModel)}
-    for key in table:
-        if key not in known:
-            raise CameraError(path, f"{_TABLE}.{key}", f"unknown key; expected one of {', '.join(known)}")
-    kwargs: dict[str, object] = {}
-    for name in known:
-        if name not in table:
-            continue
-        value = table[name]
-        if name == "distortion":
-            if not (isinstance(value, list) and all(_is_number(k) for k in value) and len(value) in (0, 4, 5, 8, 12, 14)):
-                raise CameraError(path, f"{_TABLE}.{name}", f"expected a list of 4, 5, 8, 12 or 14 numbers, got {value!r}")
-            kwargs[name] = tuple(float(k) for k in value)
-        elif name in ("width_px", "height_px"):
-            if not (isinstance(value, int) and not isinstance(value, bool)):
-                raise CameraError(path, f"{_TABLE}.{name}", f"expected an integer, got {value!r}")
-            kwargs[name] = value
-        else:
-            if not _is_number(value):
-                raise CameraError(path, f"{_TABLE}.{name}", f"expected a number, got {value!r}")
-            kwargs[name] = float(value)
-    missing = [n for n in ("width_px", "height_px", "fx_px", "fy_px", "cx_px", "cy_px") if n not in kwargs]
+    """Read ``camera.toml``; a wrong file raises CameraError naming the file, the line and the key."""
+    data, src = read_toml(path, CameraError, "run `fearguard calibrate` to make one")
+    if _TABLE not in data:
+        raise src.error(_TABLE, f"missing table; expected [{_TABLE}] with {', '.join(_REQUIRED)}, ...")
+    t = Table(src, data[_TABLE], _TABLE, [f.name for f in fields(CameraModel)])
+    missing = [n for n in _REQUIRED if not t.has(n)]
     if missing:
-        raise CameraError(path, f"[{_TABLE}]", f"missing key(s) {', '.join(missing)}")
+        raise src.error(_TABLE, f"missing key(s) {', '.join(missing)}")
+    kwargs: dict[str, Any] = {}
+    for name in t.known:
+        if not t.has(name):
+            continue
+        if name == "distortion":
+            coefficients = number_list(t.data[name])
+            if coefficients is None or len(coefficients) not in _DISTORTION_COUNTS:
+                raise t.fail(name, f"expected a list of 4, 5, 8, 12 or 14 finite numbers, got {t.data[name]!r}")
+            kwargs[name] = tuple(coefficients)
+        elif name in ("width_px", "height_px"):
+            kwargs[name] = t.integer(name, low=1, high=1_000_000)
+        else:
+            kwargs[name] = t.number(name)
     try:
-        return CameraModel(**kwargs)  # type: ignore[arg-type]
+        return CameraModel(**kwargs)
     except ValueError as exc:
-        raise CameraError(path, f"[{_TABLE}]", str(exc)) from exc
-
-
-def _is_number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
+        raise src.error(_TABLE, str(exc)) from exc
 
 
 # -- presets for the common cars ----------------------------------------------------------------

@@ -1,13 +1,23 @@
-"""Exceptions a person can act on.
+"""Every exception class fearguard defines, in one tree.
 
-    FearguardError          base: the CLI catches it, prints ``Type: message`` and exits 2
-    ├── RuleError           a rule-base file is wrong (names the file, the line or key, and the fix)
-    ├── CameraError         camera.toml is wrong (camera.py)
-    ├── CalibrationError    chessboard photos cannot calibrate (calibration.py)
-    ├── ScenarioError       a scenario file is wrong (sim/schema.py)
-    ├── SourceError         a recording cannot be read (replay/sources.py)
-    └── SensorLogError      a sensor log line is malformed, with --strict (replay/sensor_log.py)
+    Exception
+    ├── FearguardError              base of errors raised on purpose: the CLI prints ``Type: message``, exits 2
+    │   ├── CalibrationError        chessboard photos cannot calibrate (calibration.py)
+    │   └── FileError               a file is wrong: ``FileError(path, where, problem)`` → "path, where: problem"
+    │       ├── RuleError           a rule-base file (fuzzy/loader.py, policy.py's [policy] table)
+    │       ├── CameraError         camera.toml (camera.py)
+    │       ├── ScenarioError       a scenario file (sim/scenario.py)
+    │       ├── SourceError         a recording: video, image folder, Donkey Car tub (replay/sources.py)
+    │       └── SensorLogError      a sensor log, with --strict (replay/sensor_log.py); its place is a line number
+    ├── ValueError
+    │   └── RuleSyntaxError         a rule's text does not parse (fuzzy/rule_text.py); the loader wraps it in RuleError
+    └── RuntimeError
+        └── EstimatorFault          a fault the simulator injects into a steering estimator (sim/loop.py)
+    UserWarning
+    └── SensorLogWarning            something in a sensor log is ignored, the log is still used
 
+Every file is read through ``reader.py`` (bounded size and nesting, strict tables), so a malformed file
+is always one of the ``FileError`` kinds above, naming the file, the line and the key.
 ``FearGuard.step`` never raises any of these: faults at run time become safe commands.
 """
 
@@ -20,11 +30,52 @@ class FearguardError(Exception):
     """Base of every error fearguard raises on purpose."""
 
 
-class RuleError(FearguardError):
-    """A rule-base file (TOML) is malformed or inconsistent."""
+class FileError(FearguardError):
+    """A file (or an input naming one) cannot be used; ``where`` is e.g. ``line 12, key policy.hold_s``."""
 
-    def __init__(self, path: str | Path, where: str, problem: str) -> None:
-        self.path = str(path)
+    def __init__(self, path: str | Path | None, where: str, problem: str) -> None:
+        self.path = None if path is None else str(path)
         self.where = where
         self.problem = problem
-        super().__init__(f"{self.path}, {where}: {problem}")
+        prefix = ", ".join(p for p in (self.path, where) if p)
+        super().__init__(f"{prefix}: {problem}" if prefix else problem)
+
+
+class RuleError(FileError):
+    """A rule-base file (TOML) is malformed or inconsistent."""
+
+
+class CameraError(FileError):
+    """A camera file (TOML) is missing, malformed or physically impossible."""
+
+
+class ScenarioError(FileError):
+    """A scenario file (TOML) is missing, malformed, or describes an impossible world."""
+
+
+class SourceError(FileError):
+    """A recording cannot be used at all: missing, in a format OpenCV cannot decode, empty, or a broken tub."""
+
+
+class SensorLogError(FileError):
+    """A sensor log cannot be used: missing, no header or no t_s column, or (strict) a malformed line."""
+
+    def __init__(self, path: str | Path, line: int | None, problem: str) -> None:
+        self.line = line  # a log's place is its line number (1-based), None for the whole file
+        super().__init__(path, "" if line is None else f"line {line}", problem)
+
+
+class CalibrationError(FearguardError):
+    """Calibration cannot be done with these inputs (no images, bad pattern, too few boards, mixed sizes)."""
+
+
+class RuleSyntaxError(ValueError):
+    """The text is not a rule; the message says what was expected where."""
+
+
+class EstimatorFault(RuntimeError):
+    """Raised by the faulty steering estimator of a scenario (the supervisor must survive it)."""
+
+
+class SensorLogWarning(UserWarning):
+    """Something in a sensor log is ignored (unknown columns) but the log is still used."""

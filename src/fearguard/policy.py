@@ -15,15 +15,15 @@ from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from enum import Enum
 from itertools import pairwise
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from fearguard.cues import finite_number
-from fearguard.errors import RuleError
 from fearguard.fear import LEVEL_NAMES, Cause
 from fearguard.observation import Lead  # defined with the other plain values; fearguard.policy.Lead keeps working
+from fearguard.reader import Table, TomlSource
+from fearguard.readings import finite_reading
 from fearguard.vehicle import VehicleLimits
 
 ENVELOPE_SHRINK = 1e-9  # [-] keeps v·t_r + v²/2a ≤ d − margin true after floating-point rounding
@@ -62,29 +62,17 @@ class PolicyConfig:
     follow_gain: float = 1.0  # [deg/deg] steering per degree of lead bearing
 
     @classmethod
-    def from_table(cls, table: Mapping[str, Any], path: str | Path, line_of: Any) -> PolicyConfig:
-        """Validate a ``[policy]`` table; errors name the file, the line and the key."""
-        known = {f.name for f in fields(cls)}
-
-        def fail(key: str, problem: str) -> RuleError:
-            line = line_of(key)
-            where = f"line {line}, key policy.{key}" if line else f"key policy.{key}"
-            return RuleError(path, where, problem)
-
+    def from_table(cls, src: TomlSource, data: object, key_path: str = "policy") -> PolicyConfig:
+        """Validate a ``[policy]`` table with the strict reader; errors name the file, the line and the key."""
+        t = Table(src, data, key_path, [f.name for f in fields(cls)])
         values: dict[str, Any] = {}
-        for key, value in table.items():
-            if key not in known:
-                raise fail(key, f"unknown policy key; known keys: {', '.join(sorted(known))}")
+        for key in t.data:
             if key == "speed_fraction":
-                values[key] = _fractions(value, lambda p, key=key: fail(key, p))
+                values[key] = _fractions(t, key)
             elif key == "enter_frames":
-                if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-                    raise fail(key, f"must be a whole number >= 1, got {value!r}")
-                values[key] = value
+                values[key] = t.integer(key, low=1)
             else:
-                if not _finite(value):
-                    raise fail(key, f"must be a finite number, got {value!r}")
-                values[key] = float(value)
+                values[key] = t.number(key)
         cfg = cls(**values)
         for key, ok, problem in (
             ("emergency_enter_fear", 0.0 < cfg.emergency_enter_fear <= 1.0, "must be in (0, 1]"),
@@ -99,24 +87,25 @@ class PolicyConfig:
             ("follow_gain", cfg.follow_gain >= 0.0, "must be >= 0"),
         ):
             if not ok:
-                raise fail(key, f"{problem}, got {getattr(cfg, key)}")
+                raise t.fail(key, f"{problem}, got {getattr(cfg, key)}")
         return cfg
 
 
-def _fractions(value: Any, fail: Any) -> tuple[float, ...]:
-    if isinstance(value, Mapping):
-        missing = [n for n in LEVEL_NAMES if n not in value]
-        extra = [k for k in value if k not in LEVEL_NAMES]
-        if missing or extra:
-            raise fail(f"needs exactly the levels {', '.join(LEVEL_NAMES)}; missing {missing}, unknown {extra}")
-        seq = [value[n] for n in LEVEL_NAMES]
-    else:
-        raise fail("must be a table like { very_low = 1.0, low = 0.8, ... }")
-    if not all(_finite(v) and 0.0 <= v <= 1.0 for v in seq):
-        raise fail(f"each fraction must be a number in [0, 1], got {seq}")
-    if any(b > a for a, b in pairwise(seq)):
-        raise fail(f"fractions must not increase with fear (monotone policy), got {seq}")
-    return tuple(float(v) for v in seq)
+def _fractions(t: Table, key: str) -> tuple[float, ...]:
+    value = t.data[key]
+    if not isinstance(value, Mapping):
+        raise t.fail(key, "must be a table like { very_low = 1.0, low = 0.8, ... }")
+    missing = [n for n in LEVEL_NAMES if n not in value]
+    extra = [k for k in value if k not in LEVEL_NAMES]
+    if missing or extra:
+        raise t.fail(key, f"needs exactly the levels {', '.join(LEVEL_NAMES)}; missing {missing}, unknown {extra}")
+    seq = [finite_reading(value[n]) for n in LEVEL_NAMES]
+    if not all(v is not None and 0.0 <= v <= 1.0 for v in seq):
+        raise t.fail(key, f"each fraction must be a number in [0, 1], got {[value[n] for n in LEVEL_NAMES]}")
+    fractions = tuple(float(v) for v in seq if v is not None)
+    if any(b > a for a, b in pairwise(fractions)):
+        raise t.fail(key, f"fractions must not increase with fear (monotone policy), got {list(fractions)}")
+    return fractions
 
 
 def fear_speed_mps(fear: float, level_anchors: np.ndarray, cfg: PolicyConfig, vehicle: VehicleLimits) -> float:

@@ -60,9 +60,9 @@ BAD_FILES = [
     (("normal_band = [80.0, 180.0]", "normal_band = [80.0, 300.0]"), "normal_band", r"variables\.brightness\.normal_band"),
     (("normal_band = [80.0, 180.0]", ""), "brightness needs normal_band", r"normal_band"),
     (("very_high = { trimf = [0.75, 1.0, 1.0] }", "extreme = { trimf = [0.75, 1.0, 1.0] }"), "fear terms must be exactly", r"key fear"),
-    (('cause = "collision"', 'cause = "bumps"'), "cause must be one of", r"groups\.collision\.cause"),
-    (('cause = "collision"', 'cause = "collision"\npriority = 3'), "unknown keys", r"groups\.collision"),
-    (("hold_s = 2.0 ", "hold_secs = 2.0 "), "unknown policy key", r"line \d+, key policy\.hold_secs"),
+    (('cause = "collision"', 'cause = "bumps"'), "must be one of 'collision'", r"groups\.collision\.cause"),
+    (('cause = "collision"', 'cause = "collision"\npriority = 3'), "unknown key 'priority'", r"groups\.collision\.priority"),
+    (("hold_s = 2.0 ", "hold_secs = 2.0 "), "unknown key 'hold_secs' (did you mean 'hold_s'?)", r"line \d+, key policy\.hold_secs"),
     (("hold_s = 2.0 ", "hold_s = -1.0 "), "must be >= 0", r"policy\.hold_s"),
     (("enter_frames = 3 ", "enter_frames = 0 "), "whole number >= 1", r"policy\.enter_frames"),
     (("emergency_exit_fear = 0.5 ", "emergency_exit_fear = 0.8 "), "below emergency_enter_fear", r"policy\.emergency_exit_fear"),
@@ -72,7 +72,7 @@ BAD_FILES = [
     (("speed_fraction = { very_low = 1.0, low = 0.8, medium = 0.6, high = 0.4, very_high = 0.3 }", "speed_fraction = [1.0, 0.5]"),
      "must be a table like", r"policy\.speed_fraction"),
     (("comfort_accel_mps2 = 0.5 ", 'comfort_accel_mps2 = "fast" '), "finite number", r"policy\.comfort_accel_mps2"),
-    (('name = "model car 1:10"', 'name = "x"\ncolour = "red"'), "unknown top-level key", r"key colour"),
+    (('name = "model car 1:10"', 'name = "x"\ncolour = "red"'), "unknown key 'colour'", r"line 10, key colour"),
     (('name = "model car 1:10"', 'name = "x"\n[[oops'), "TOML syntax", r"line"),
 ]
 

@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 
 import fearguard as fg
+from fearguard.reader import TomlSource
 from fearguard.sim.qr import payload, place_boards
 from fearguard.sim.scenario import Scenario, ScenarioError, load_scenario
-from fearguard.sim.schema import TomlSource
 
 LIBRARY = Path(__file__).resolve().parents[2] / "src" / "fearguard" / "scenarios"
 REQUIRED = {"clear_straight", "s_curves", "tunnel_exit_glare", "night", "tree_shadows", "occluding_traffic_follow_lead",

@@ -64,7 +64,8 @@ SHAPES: dict[str, Shape] = {
     "trapmf": Shape(_shipped_or_skfuzzy("trapmf", lambda sk, x, p: sk.trapmf(x, list(p))), 4, "a <= b <= c <= d", _sorted),
     "gaussmf": Shape(_shipped_or_skfuzzy("gaussmf", lambda sk, x, p: sk.gaussmf(x, *p)), 2, "sigma > 0", lambda p: p[1] > 0),
     "gauss2mf": Shape(
-        _shipped_or_skfuzzy("gauss2mf", lambda sk, x, p: sk.gauss2mf(x, *p)), 4, "sigma1 > 0, sigma2 > 0", lambda p: p[1] > 0 and p[3] > 0
+        _shipped_or_skfuzzy("gauss2mf", lambda sk, x, p: sk.gauss2mf(x, *p)), 4, "mean1 <= mean2, sigma1 > 0, sigma2 > 0",
+        lambda p: p[0] <= p[2] and p[1] > 0 and p[3] > 0,
     ),
     "gbellmf": Shape(_shipped_or_skfuzzy("gbellmf", lambda sk, x, p: sk.gbellmf(x, *p)), 3, "a > 0", lambda p: p[0] > 0),
     "sigmf": Shape(_shipped_or_skfuzzy("sigmf", lambda sk, x, p: sk.sigmf(x, *p)), 2, "any b, c", lambda p: True),

@@ -15,6 +15,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+from fearguard.errors import RuleSyntaxError
+
 
 @dataclass(frozen=True)
 class Is:
@@ -47,10 +49,6 @@ class ParsedRule:
     antecedent: Node
     level: str
     weight: float
-
-
-class RuleSyntaxError(ValueError):
-    """The text is not a rule; the message says what was expected where."""
 
 
 _TOKEN = re.compile(r"\s*(\(|\)|[A-Za-z_][A-Za-z0-9_]*|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|\S)")

@@ -21,7 +21,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fearguard.errors import FearguardError
+from fearguard.errors import SensorLogError, SensorLogWarning
+from fearguard.reader import loads_json
 
 MAX_AGE_S = 0.25  # [s] default: a reading older than this is not used for a frame (5 frames at 20 Hz)
 NUMBER_COLUMNS = (
@@ -31,18 +32,6 @@ TEXT_COLUMNS = ("qr_payload",)
 KNOWN_COLUMNS = (*NUMBER_COLUMNS, *TEXT_COLUMNS)
 CSV_SUFFIXES = (".csv",)
 JSONL_SUFFIXES = (".jsonl", ".json", ".ndjson")
-
-
-class SensorLogError(FearguardError):
-    """A sensor log cannot be used: missing, no header or no t_s column, or (strict) a malformed line."""
-
-    def __init__(self, path: str | Path, line: int | None, problem: str) -> None:
-        self.path, self.line, self.problem = str(path), line, problem
-        super().__init__(f"{self.path}, line {line}: {problem}" if line is not None else f"{self.path}: {problem}")
-
-
-class SensorLogWarning(UserWarning):
-    """Something in a sensor log is ignored (unknown columns) but the log is still used."""
 
 
 @dataclass(frozen=True)
@@ -234,7 +223,7 @@ def _jsonl_rows(path: Path, lines: list[tuple[str, bool]], report: Report) -> tu
         if not ok or not text.strip():
             continue
         try:
-            value = json.loads(text)
+            value = loads_json(text)
         except ValueError as exc:
             report(number, f"not valid JSON ({exc})")
             continue

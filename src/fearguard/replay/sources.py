@@ -13,7 +13,6 @@ shifts neither the indices nor ``t_s`` of the frames after it.
 
 from __future__ import annotations
 
-import json
 import math
 import re
 import statistics
@@ -28,7 +27,8 @@ from typing import Any, ClassVar
 import cv2
 import numpy as np
 
-from fearguard.errors import FearguardError
+from fearguard.errors import SourceError
+from fearguard.reader import loads_json
 
 DEFAULT_FPS = 20.0  # [Hz] frame rate assumed when none is known (Donkey Car's default DRIVE_LOOP_HZ)
 MAX_PLAUSIBLE_FPS = 1000.0  # [Hz] a container frame rate above this (or ≤ 0, NaN) is treated as missing
@@ -39,15 +39,6 @@ VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".h264", ".mj
 TUB_IMAGE_TYPES = ("image_array",)  # Tub v2 input types whose value is an image file name in images/
 _EMPTY_RECORD: Mapping[str, Any] = MappingProxyType({})
 _CONVERT_ADVICE = "convert it with `ffmpeg -i {src} -c:v libx264 -pix_fmt yuv420p out.mp4`"
-
-
-class SourceError(FearguardError):
-    """A recording cannot be used at all: missing, in a format OpenCV cannot decode, empty, or a broken tub."""
-
-    def __init__(self, path: str | Path | None, where: str, problem: str) -> None:
-        self.path, self.where, self.problem = (None if path is None else str(path)), where, problem
-        prefix = ", ".join(p for p in (self.path, where) if p)
-        super().__init__(f"{prefix}: {problem}" if prefix else problem)
 
 
 @dataclass(frozen=True, eq=False)  # eq=False: holds an image, so compared by identity
@@ -342,7 +333,7 @@ class TubSource(FrameSource):
                     if not line.strip():
                         continue
                     try:
-                        yield catalog.name, number, json.loads(line)
+                        yield catalog.name, number, loads_json(line)
                     except ValueError as exc:
                         yield catalog.name, number, f"not valid JSON ({exc})"
 
@@ -399,7 +390,7 @@ def _read_manifest(manifest: Path) -> tuple[list[str], list[str], dict[str, Any]
     parsed: list[object] = []
     for number in (1, 2, 5):
         try:
-            parsed.append(json.loads(lines[number - 1]))
+            parsed.append(loads_json(lines[number - 1]))
         except ValueError as exc:
             raise SourceError(manifest, f"line {number}", f"not valid JSON ({exc}); {hint}") from exc
     inputs, types, meta = parsed

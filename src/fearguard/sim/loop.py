@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from fearguard.camera import CameraModel
+from fearguard.errors import EstimatorFault
 from fearguard.fuzzy.loader import load_rules
 from fearguard.observation import Observation
 from fearguard.overlay import VideoOut, annotate
@@ -31,10 +32,6 @@ from fearguard.vision.frame import FrameAnalysis
 from fearguard.vision.lane_steering import HoughLaneSteering
 
 CONTROLLERS = ("guarded", *BASELINES)
-
-
-class EstimatorFault(RuntimeError):
-    """Raised by the faulty steering estimator of a scenario (the supervisor must survive it)."""
 
 
 class FaultyEstimator(HoughLaneSteering):

@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from pathlib import Path
 from typing import Any
 
+from fearguard.errors import ScenarioError
 from fearguard.fuzzy.loader import bundled_rules_path
 from fearguard.policy import Mode, Strategy
+from fearguard.reader import Table, number_list, read_toml
+from fearguard.readings import whole_number
 from fearguard.sim.scales import SCALES, scale_defaults
 from fearguard.sim.scenario_values import (
     COLOURS,
@@ -53,7 +55,6 @@ from fearguard.sim.scenario_values import (
     UltrasonicFaults,
     VehicleProfile,
 )
-from fearguard.sim.schema import ScenarioError, Table, TomlSource, is_number
 
 __all__ = [
     "BrakingEvent",
@@ -96,17 +97,8 @@ _SEGMENT_KEYS = ("kind", "length_m", "radius_m", "turn", "left_marking", "left_c
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file; a wrong file raises ScenarioError naming the file, line and key."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ScenarioError(path, "file", "no such file; give the path of a scenario such as scenarios/clear_straight.toml") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(path, "file", f"cannot be read as UTF-8 text ({exc})") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(path, "TOML syntax", f"{exc}; fix the syntax at that line") from None
-    return _build(Table(TomlSource(path, text), data, "", _TOP_KEYS), path)
+    data, src = read_toml(path, ScenarioError, "give the path of a scenario such as scenarios/clear_straight.toml")
+    return _build(Table(src, data, "", _TOP_KEYS), path)
 
 
 def _build(top: Table, path: Path) -> Scenario:
@@ -287,11 +279,11 @@ def _profile(t: Table) -> tuple[tuple[float, float], ...]:
     points: list[tuple[float, float]] = []
     ok = isinstance(value, list) and len(value) > 0
     for i, p in enumerate(value if ok else []):
-        good = isinstance(p, list) and len(p) == 2 and all(is_number(x) and math.isfinite(x) for x in p)
-        if not good or p[1] < 0 or (points and p[0] <= points[-1][0]):
+        xy = number_list(p, 2)
+        if xy is None or xy[1] < 0 or (points and xy[0] <= points[-1][0]):
             raise t.src.error(f"{t.path_of('speed_profile')}[{i}]", "each point must be [t_s, speed_mps] with speed >= 0 and t_s "
                                                                     f"increasing, got {p!r}")
-        points.append((float(p[0]), float(p[1])))
+        points.append((xy[0], xy[1]))
     if not ok:
         raise t.fail("speed_profile", f"must be a non-empty list of [t_s, speed_mps] points, got {value!r}")
     return tuple(points)
@@ -319,7 +311,7 @@ def _qr(t: Table, d: dict[str, Any]) -> QrBoardGroup:
     if not ROUTE_NAME.match(route):
         raise t.fail("route", f"must be 1-16 letters, digits, '_' or '-' (it goes inside the QR payload), got {route!r}")
     missing = t.data.get("missing", [])
-    if not isinstance(missing, list) or not all(isinstance(i, int) and not isinstance(i, bool) and 0 <= i < count for i in missing):
+    if not isinstance(missing, list) or not all(whole_number(i) is not None and 0 <= i < count for i in missing):
         raise t.fail("missing", f"must be a list of board indices in [0, {count - 1}], got {missing!r}")
     return QrBoardGroup(
         start_m=t.number("start_m", low=0.0, unit="m"), spacing_m=t.number("spacing_m", low=0.0, strict_low=True, unit="m"),
