@@ -20,6 +20,7 @@ import numpy as np
 
 from fearguard.camera import CameraModel
 from fearguard.errors import CalibrationError
+from fearguard.readings import finite_reading
 
 DEFAULT_PATTERN = (9, 6)  # inner corners (columns, rows) of the usual OpenCV sample board
 MIN_BOARDS = 3  # boards needed for a calibration (OpenCV's docs ask for at least 10 for a good one)
@@ -184,7 +185,7 @@ def calibrate_chessboard(
         raise CalibrationError(f"square size {square_m!r} m: expected the side of one board square in metres, > 0")
     if mount_height_m is not None and not _positive(mount_height_m):
         raise CalibrationError(f"mount height {mount_height_m!r} m: expected the camera's height above the ground in metres, > 0")
-    if isinstance(pitch_deg, bool) or not isinstance(pitch_deg, int | float) or not math.isfinite(pitch_deg):
+    if finite_reading(pitch_deg) is None:
         raise CalibrationError(f"pitch {pitch_deg!r} deg: expected a finite angle (positive = looking down)")
 
     images: dict[Path, np.ndarray] = {}
@@ -251,7 +252,7 @@ def _reprojection_rms_px(objects: np.ndarray, corners: np.ndarray, rvec: np.ndar
 
 def _positive(value: object) -> bool:
     """A finite number > 0 (bools are not numbers here)."""
-    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value) and value > 0
+    return (finite_reading(value) or 0.0) > 0
 
 
 def _where(paths: Sequence[Path]) -> str:

@@ -1,7 +1,8 @@
 """The five risk cues: names, units, physical ranges and their worst values.
 
 A cue that is NaN, outside its physical range, or not a number is *unknown*, and unknown is the
-worst case (docs/architecture.md, invariant 4). This module is the one place that decides what unknown means.
+worst case (docs/architecture.md, invariant 4). This module is the one place that decides what unknown means;
+what counts as a number at all is decided by ``readings.py``.
 """
 
 from __future__ import annotations
@@ -9,9 +10,10 @@ from __future__ import annotations
 import math
 from dataclasses import astuple, dataclass
 from enum import Enum
-from numbers import Real
 
 import numpy as np
+
+from fearguard.readings import cue_value
 
 CUE_NAMES: tuple[str, ...] = (
     "lane_confidence",
@@ -70,34 +72,13 @@ class Cues:
     qr_staleness_s: float
 
     def values(self) -> list[float]:
-        """The cues as floats in CUE_NAMES order (non-numbers, also numeric strings, become NaN)."""
-        return [_to_float(v) for v in astuple(self)]
+        """The cues as floats in CUE_NAMES order; a field that is not a reading (readings.py: text, bytes,
+        bools, Decimal, arrays, ...) becomes NaN, which is unknown = worst."""
+        return [cue_value(v) for v in astuple(self)]
 
     def as_array(self) -> np.ndarray:
         """The cues as a float vector in CUE_NAMES order (non-numbers become NaN)."""
         return np.array(self.values(), dtype=float)
-
-
-def real_number(value: object) -> float | None:
-    """A real number as float (NaN and inf kept), else None: bools, strings, arrays are not readings."""
-    if isinstance(value, bool) or not isinstance(value, Real):
-        return None
-    try:
-        return float(value)
-    except (OverflowError, ValueError, TypeError):
-        return None
-
-
-def finite_number(value: object) -> float | None:
-    """A finite real number as float, else None (bools, strings and NaN/inf are not numbers here)."""
-    f = real_number(value)
-    return f if f is not None and math.isfinite(f) else None
-
-
-def _to_float(value: object) -> float:
-    """A cue as float; anything that is not a real number ("0.9", b"1", True, Decimal, an array) is NaN: unknown."""
-    f = real_number(value)
-    return math.nan if f is None else f
 
 
 def worst_filled(values: list[float], brightness_worst: float) -> tuple[list[float], list[bool]]:

@@ -79,3 +79,25 @@ class EstimatorFault(RuntimeError):
 
 class SensorLogWarning(UserWarning):
     """Something in a sensor log is ignored (unknown columns) but the log is still used."""
+
+
+# -- quoting foreign values in messages --------------------------------------------------------
+DESCRIBE_CHARS = 80  # [characters] of a foreign value quoted in a message or a reason
+
+
+def describe(value: object) -> str:
+    """``repr`` of a foreign value for a message, shortened; never raises (a broken ``repr`` is named by type)."""
+    try:
+        text = repr(value)
+    except Exception:  # foreign objects may fail even to print: the message must still be written
+        return f"<{type(value).__name__} whose repr raises>"
+    return text if len(text) <= DESCRIBE_CHARS else text[: DESCRIBE_CHARS - 1] + "…"
+
+
+def describe_exception(exc: BaseException) -> str:
+    """``Type: message`` of an exception; never raises (a broken ``__str__`` is reported as such)."""
+    try:
+        text = str(exc)
+    except Exception:  # an exception whose __str__ raises must not escape the handler that reports it
+        text = "<message unprintable>"
+    return f"{type(exc).__name__}: {text}"

@@ -11,7 +11,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from fearguard.cues import Cues, finite_number
+from fearguard.cues import Cues
+from fearguard.readings import finite_reading
 
 
 @dataclass(frozen=True)
@@ -24,11 +25,11 @@ class Lead:
     @property
     def usable(self) -> bool:
         """A lead can be followed when its bearing is a finite number (a range is optional)."""
-        return finite_number(self.bearing_deg) is not None
+        return finite_reading(self.bearing_deg) is not None
 
     @property
     def usable_range_m(self) -> float | None:
-        r = finite_number(self.range_m)
+        r = finite_reading(self.range_m)
         return r if r is not None and r >= 0.0 else None
 
 
@@ -44,7 +45,7 @@ class LeadBox:
     @property
     def usable(self) -> bool:
         vals = (self.x_px, self.y_px, self.w_px, self.h_px)
-        return all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v) for v in vals) and self.w_px > 0 < self.h_px
+        return all(finite_reading(v) is not None for v in vals) and self.w_px > 0 < self.h_px
 
     def scaled(self, factor: float) -> LeadBox:
         return LeadBox(self.x_px * factor, self.y_px * factor, self.w_px * factor, self.h_px * factor)

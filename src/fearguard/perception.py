@@ -17,12 +17,13 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.cues import Cues, real_number
+from fearguard.cues import Cues
 from fearguard.observation import Lead, LeadBox, Observation
+from fearguard.readings import reading
 from fearguard.sensors.localisation import LocalisationState, QrLocaliser
 from fearguard.sensors.ultrasonic import RangeEstimate, UltrasonicFilter
 from fearguard.vehicle import VehicleLimits
-from fearguard.vision.frame import FrameAnalysis, FramePipeline
+from fearguard.vision.frame import FrameAnalysis, FramePipeline, invalid_frame_reason
 
 FROZEN_FRAMES = 3  # [frames] identical frames in a row that mean the camera froze (real sensors always have noise)
 ULTRASONIC_CONE_DEG = 15.0  # [deg] a lead within ±half this bearing is what the ultrasonic sees
@@ -97,7 +98,7 @@ class Perception:
         """Cues for one Observation; readings that are missing or not numbers count as missing."""
         clock = time.perf_counter
         t0 = clock()
-        t_s = real_number(obs.t_s)
+        t_s = reading(obs.t_s)
         t = t_s if t_s is not None else _NAN
         reasons: list[str] = []  # alerts
         facts: list[str] = []
@@ -150,7 +151,7 @@ class Perception:
 
     def _frozen(self, frame: object) -> bool:
         """True when this frame is byte-identical (on a sparse grid) to the last FROZEN_FRAMES − 1 ones."""
-        if not isinstance(frame, np.ndarray) or frame.size == 0:
+        if invalid_frame_reason(frame) is not None:  # not an image: the pipeline says why, nothing to compare
             self._last_signature, self._same_frames = None, 0
             return False
         signature = np.ascontiguousarray(frame[::7, ::7]).tobytes()
@@ -179,7 +180,7 @@ class Perception:
         payloads = list(seen)
         if obs.qr_payload is not None:
             payloads.append(obs.qr_payload)
-        state = self.localiser.update(t, payloads, real_number(obs.odometer_m))
+        state = self.localiser.update(t, payloads, reading(obs.odometer_m))
         reasons.extend(state.reasons)
         return state.staleness_s, state
 

@@ -19,7 +19,6 @@ from typing import Any
 
 import numpy as np
 
-from fearguard.cues import finite_number
 from fearguard.fear import LEVEL_NAMES, Cause
 from fearguard.observation import Lead  # defined with the other plain values; fearguard.policy.Lead keeps working
 from fearguard.reader import Table, TomlSource
@@ -43,7 +42,7 @@ class Strategy(Enum):
 
 
 def _finite(value: object) -> bool:
-    return finite_number(value) is not None
+    return finite_reading(value) is not None
 
 
 @dataclass(frozen=True)
@@ -114,8 +113,9 @@ def fear_speed_mps(fear: float, level_anchors: np.ndarray, cfg: PolicyConfig, ve
 
 
 def stopping_distance_m(speed_mps: float, vehicle: VehicleLimits) -> float:
-    """Distance to stop from speed: reaction distance plus braking distance v²/2a."""
-    return speed_mps * vehicle.reaction_time_s + speed_mps**2 / (2.0 * vehicle.max_decel_mps2)
+    """Distance to stop from speed: reaction distance plus braking distance v²/2a (v·v: an absurd speed gives
+    inf, where ``v**2`` raises OverflowError)."""
+    return speed_mps * vehicle.reaction_time_s + speed_mps * speed_mps / (2.0 * vehicle.max_decel_mps2)
 
 
 def envelope_speed_mps(range_m: float, vehicle: VehicleLimits) -> float:
@@ -247,9 +247,10 @@ def emergency_plan(
         elif cause is Cause.ROAD and lead is not None and lead.usable:
             rng = lead.usable_range_m
             cap = rng / cfg.follow_time_gap_s if rng is not None else cfg.crawl_fraction * vehicle.max_speed_mps
-            steer = float(np.clip(cfg.follow_gain * lead.bearing_deg, -vehicle.max_steering_deg, vehicle.max_steering_deg))
+            bearing = float(lead.bearing_deg)  # usable: a reading (readings.py), e.g. a Fraction, as a float
+            steer = float(np.clip(cfg.follow_gain * bearing, -vehicle.max_steering_deg, vehicle.max_steering_deg))
             gap = f"range {rng:.2f} m, {cfg.follow_time_gap_s:.1f} s gap" if rng is not None else "no range: crawl speed"
-            why = f"road not trusted (fear {f:.2f}): follow the lead at bearing {lead.bearing_deg:+.1f} deg ({gap})"
+            why = f"road not trusted (fear {f:.2f}): follow the lead at bearing {bearing:+.1f} deg ({gap})"
             plans.append(EmergencyPlan(Strategy.FOLLOW_LEAD, cap, steer, why))
         elif cause is Cause.ROAD:
             why = f"road not trusted (fear {f:.2f}) and no lead to follow: stop, holding {held_steering_deg:+.1f} deg"

@@ -51,3 +51,4 @@ def whole_number(value: object) -> int | None:
     if isinstance(value, bool | np.bool_) or not isinstance(value, int | np.integer):
         return None
     return int(value)
+

@@ -2,8 +2,10 @@
 
 Observation → perception (cues) → fear (rule base) → policy (speed limit, mode, strategy) → Command.
 Given ready-made ``cues`` the perception is skipped (cue-level use, no camera needed).
-``step`` never raises: a fault anywhere (steering function raising or returning garbage, time not
-increasing, a malformed observation) becomes EMERGENCY/STOP with the fault in ``reasons``.
+``step`` never raises an ``Exception``: a fault anywhere (steering function raising or returning garbage,
+time not increasing, a malformed observation, even values whose ``repr`` raises) becomes EMERGENCY/STOP
+with the fault in ``reasons``. KeyboardInterrupt and SystemExit from the steering function propagate,
+as Python code expects (they are not faults of the car but requests to stop the program).
 """
 
 from __future__ import annotations
@@ -14,7 +16,8 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from fearguard.camera import CameraModel
-from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues, finite_number, worst_filled
+from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues, worst_filled
+from fearguard.errors import describe, describe_exception
 from fearguard.fear import Cause, FearLevel, FearResult
 from fearguard.fuzzy.loader import load_rules
 from fearguard.fuzzy.rulebase import RuleBase
@@ -31,6 +34,7 @@ from fearguard.policy import (
     next_mode,
     rate_limited_mps,
 )
+from fearguard.readings import finite_reading
 from fearguard.vehicle import VehicleLimits
 
 SteeringFunction = Callable[[Any], float]
@@ -99,16 +103,16 @@ class FearGuard:
         try:
             return self._step(obs)
         except Exception as exc:  # last line of defence: a bug must not crash the car's loop
-            return self._fault_command(obs, f"fault: internal error {type(exc).__name__}: {exc}", None)
+            return self._fault_command(obs, f"fault: internal error {describe_exception(exc)}", None)
 
     # -- the frame ----------------------------------------------------------------------------
     def _step(self, obs: Observation) -> Command:
         if not isinstance(obs, Observation):
             return self._fault_command(obs, f"fault: expected an Observation, got {type(obs).__name__}", None)
-        t = finite_number(obs.t_s)
+        t = finite_reading(obs.t_s)
         st = self._state
         if t is None:
-            return self._fault_command(obs, f"fault: time t_s={obs.t_s!r} is not a finite number", None)
+            return self._fault_command(obs, f"fault: time t_s={describe(obs.t_s)} is not a finite number", None)
         if st.last_t_s is not None and t <= st.last_t_s:
             return self._fault_command(obs, f"fault: time did not increase ({st.last_t_s:.3f} s → {t:.3f} s)", t)
         cues, cue_notes, perceived, lead = self._cues(obs)
@@ -147,10 +151,10 @@ class FearGuard:
             else:
                 raw = self.steer(obs.frame)
         except Exception as exc:  # the wrapped estimator is foreign code: any failure is a fault
-            return 0.0, f"fault: steering function raised {type(exc).__name__}: {exc}"
-        value = finite_number(raw)
+            return 0.0, f"fault: steering function raised {describe_exception(exc)}"
+        value = finite_reading(raw)
         if value is None:
-            return 0.0, f"fault: steering function returned {raw!r}, not a finite number"
+            return 0.0, f"fault: steering function returned {describe(raw)}, not a finite number"
         limit = self.vehicle.max_steering_deg
         if abs(value) > limit:
             return 0.0, f"fault: steering {value:+.1f} deg outside ±{limit:.1f} deg"
@@ -161,7 +165,7 @@ class FearGuard:
         lead: Lead | None, perceived: Perceived | None,
     ) -> Command:
         st, v, cfg = self._state, self.vehicle, self.rules.policy
-        speed = finite_number(obs.speed_mps)
+        speed = finite_reading(obs.speed_mps)
         speed_now = v.max_speed_mps if speed is None or speed < 0 else speed  # unknown speed: assume the worst
         range_m = self._range_for_policy(cues)
         imminent = imminent_collision(range_m, speed_now, v)

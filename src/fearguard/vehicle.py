@@ -2,8 +2,9 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
+
+from fearguard.readings import finite_reading
 
 
 @dataclass(frozen=True)
@@ -29,7 +30,7 @@ class VehicleLimits:
             value = getattr(self, f.name)
             if f.type == "bool" or isinstance(value, bool):
                 continue
-            if not (isinstance(value, int | float) and math.isfinite(value)):
+            if finite_reading(value) is None:
                 raise ValueError(f"VehicleLimits.{f.name} must be a finite number, got {value!r}")
         positive = ("max_speed_mps", "max_decel_mps2", "max_steering_deg")
         for name in positive:

@@ -296,7 +296,7 @@ def test_approaching_obstacle_prediction_comes_closer_during_a_gap() -> None:
 @pytest.mark.parametrize(("t_s", "reason"), [(0.1, "time did not increase"), (0.4, "time did not increase"),
                                              (math.nan, "is not a finite number"), ("soon", "is not a finite number"),
                                              (math.inf, "is not a finite number")])
-def test_bad_time_gives_unknown_for_that_call_and_keeps_the_state(t_s: object, reason: str) -> None:
+def test_bad_time_gives_unknown_for_that_call_and_the_next_frame_is_read_again(t_s: object, reason: str) -> None:
     f, t = tracked(1.0)  # last frame at 0.4 s
     est = f.update(t_s, 1.0)
     assert math.isnan(est.range_m) and reason in est.reason

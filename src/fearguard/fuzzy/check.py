@@ -1,9 +1,16 @@
-"""Prove a rule base complete and monotone by sweeping a dense grid, group by group.
+"""Prove a rule base complete and monotone by sweeping a dense grid, group by group, and its policy
+thresholds reachable.
 
 Fear is the max over groups, and max keeps both properties: if every group fires some rule
 everywhere and never lowers its fear when one of its cues worsens, neither does fear. So each
 group is swept over the full grid of its own cues (dense: up to ~250 000 points per group),
 including ``inf`` for the open-ended cues; other cues do not affect it.
+
+Reachable: with every cue at its worst (unknown), each cause the rule base grades must reach the
+policy's ``emergency_enter_fear`` (else EMERGENCY can never be entered for it), and calm cues (lane
+seen, brightness mid-band, nothing hidden, nothing in range, just localised) must stay below
+``caution_fear`` (else the car can never drive freely). Monotone fear between the two then covers
+every case in between.
 """
 
 from __future__ import annotations
@@ -14,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens
+from fearguard.fear import Cause
 from fearguard.fuzzy.model import Group
 from fearguard.fuzzy.rulebase import RuleBase
 
@@ -35,13 +43,58 @@ class GroupCheck:
 
 
 @dataclass(frozen=True)
-class CheckReport:
-    rules: RuleBase
-    groups: tuple[GroupCheck, ...]
+class ThresholdCheck:
+    """Fear of calm cues against ``caution_fear``; each cause's fear at the worst cues against ``emergency_enter_fear``."""
+
+    calm_cues: tuple[float, ...]
+    calm_fear: float
+    caution_fear: float
+    enter_fear: float
+    worst_fears: dict[Cause, float]  # per cause the rule base grades
+
+    @property
+    def unreachable(self) -> tuple[Cause, ...]:
+        return tuple(c for c, f in self.worst_fears.items() if not f >= self.enter_fear)
+
+    @property
+    def calm_ok(self) -> bool:
+        return self.calm_fear < self.caution_fear
 
     @property
     def ok(self) -> bool:
-        return all(g.ok for g in self.groups)
+        return self.calm_ok and not self.unreachable
+
+    def lines(self) -> list[str]:
+        worst = ", ".join(f"{c.value} {f:.3f}" for c, f in self.worst_fears.items())
+        calm = ", ".join(f"{n}={v:g}" for n, v in zip(CUE_NAMES, self.calm_cues, strict=True))
+        out = [f"  thresholds     calm cues → fear {self.calm_fear:.3f} (caution_fear {self.caution_fear:g}); "
+               f"every cue at its worst → {worst} (emergency_enter_fear {self.enter_fear:g})"]
+        if not self.calm_ok:
+            out.append(f"      calm cues ({calm}) give fear {self.calm_fear:.3f}, not below caution_fear {self.caution_fear:g}: "
+                       "the car could never drive at full speed")
+        out.extend(f"      UNREACHABLE: {c.value} reaches only fear {self.worst_fears[c]:.3f} with every cue at its worst, "
+                   f"below emergency_enter_fear {self.enter_fear:g}: EMERGENCY can never be entered for it" for c in self.unreachable)
+        return out
+
+
+def check_thresholds(rb: RuleBase) -> ThresholdCheck:
+    """Calm cues must stay below caution; every cue at its worst must bring each graded cause to emergency."""
+    calm = (1.0, sum(rb.brightness_band) / 2.0, 0.0, math.inf, 0.0)
+    worst = rb.evaluate([math.nan] * len(CUE_NAMES))  # unknown = worst, both brightness extremes tried
+    causes = dict.fromkeys(g.cause for g in rb.groups)
+    return ThresholdCheck(calm, rb.evaluate(calm).fear, rb.policy.caution_fear, rb.policy.emergency_enter_fear,
+                          {c: float(worst.cause_fears[c]) for c in causes})
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    rules: RuleBase
+    groups: tuple[GroupCheck, ...]
+    thresholds: ThresholdCheck
+
+    @property
+    def ok(self) -> bool:
+        return all(g.ok for g in self.groups) and self.thresholds.ok
 
     def lines(self) -> list[str]:
         rb = self.rules
@@ -53,7 +106,9 @@ class CheckReport:
             out.append(f"  {g.group:<14} {' × '.join(g.inputs):<36} {grid:>11} points  {complete}, {monotone}")
             out.extend(f"      no rule fires at {u}" for u in g.uncovered)
             out.extend(f"      {v}" for v in g.violations)
-        out.append("OK: every group is complete and monotone, so fear is too." if self.ok else "FAILED: see above.")
+        out.extend(self.thresholds.lines())
+        out.append("OK: every group is complete and monotone, so fear is too; the policy thresholds are reachable."
+                   if self.ok else "FAILED: see above.")
         return out
 
 
@@ -120,5 +175,5 @@ def check_group(rb: RuleBase, gi: int, group: Group, examples: int = 3) -> Group
 
 
 def check_rules(rb: RuleBase) -> CheckReport:
-    """Sweep every group; the report says where completeness or monotonicity fails."""
-    return CheckReport(rb, tuple(check_group(rb, gi, g) for gi, g in enumerate(rb.groups)))
+    """Sweep every group and test the thresholds; the report says where completeness, monotonicity or reach fails."""
+    return CheckReport(rb, tuple(check_group(rb, gi, g) for gi, g in enumerate(rb.groups)), check_thresholds(rb))

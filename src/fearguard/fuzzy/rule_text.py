@@ -51,6 +51,8 @@ class ParsedRule:
     weight: float
 
 
+MAX_NESTING = 100  # [levels] of NOT and parentheses in one rule: parser, compiler and reference recurse per level
+
 _TOKEN = re.compile(r"\s*(\(|\)|[A-Za-z_][A-Za-z0-9_]*|[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|\S)")
 _KEYWORDS = {"IF", "THEN", "IS", "AND", "OR", "NOT", "WITH"}
 
@@ -63,6 +65,7 @@ class _Parser:
     def __init__(self, text: str) -> None:
         self.toks = _tokens(text)
         self.pos = 0
+        self.depth = 0
 
     def peek(self) -> str | None:
         return self.toks[self.pos] if self.pos < len(self.toks) else None
@@ -104,14 +107,18 @@ class _Parser:
 
     def neg(self) -> Node:
         tok = self.peek()
-        if self.keyword(tok) == "NOT":
+        if self.keyword(tok) == "NOT" or tok == "(":
+            self.depth += 1
+            if self.depth > MAX_NESTING:
+                raise RuleSyntaxError(f"NOT and parentheses nested deeper than {MAX_NESTING} levels; simplify the rule")
             self.take()
-            return Not(self.neg())
-        if tok == "(":
-            self.take()
-            inner = self.expr()
-            if self.take() != ")":
-                raise RuleSyntaxError("a '(' is not closed")
+            if tok == "(":
+                inner = self.expr()
+                if self.take() != ")":
+                    raise RuleSyntaxError("a '(' is not closed")
+            else:
+                inner = Not(self.neg())
+            self.depth -= 1
             return inner
         variable = self.name("a variable name")
         self.expect("IS")

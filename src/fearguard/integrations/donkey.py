@@ -34,7 +34,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel, camera_preset, load_camera
-from fearguard.cues import finite_number
+from fearguard.readings import finite_reading
 from fearguard.supervisor import Command, FearGuard, Observation
 from fearguard.vehicle import VehicleLimits
 
@@ -190,8 +190,8 @@ class FearGuardPart:
         dt = 0.0 if self._last_t_s is None else t - self._last_t_s
         self._last_t_s = t
         frame = _bgr(image)
-        a, u = finite_number(angle), finite_number(throttle)
-        range_cm = finite_number(sensors[0]) if self.has_tfmini and sensors else None
+        a, u = finite_reading(angle), finite_reading(throttle)
+        range_cm = finite_reading(sensors[0]) if self.has_tfmini and sensors else None
         limits = self.vehicle
         if not self._started:
             self._started = frame is not None and (not self.has_tfmini or (range_cm is not None and range_cm > 0))
@@ -201,13 +201,13 @@ class FearGuardPart:
         self._pilot_deg = donkey_to_deg(a, limits.max_steering_deg) if a is not None else math.nan
         range_m = range_cm / 100.0 if range_cm is not None and range_cm > 0 else None  # 0: no echo (unknown)
         if self.has_odom:
-            speed = finite_number(sensors[-1]) if sensors else None
+            speed = finite_reading(sensors[-1]) if sensors else None
             speed_mps = speed if speed is not None else math.nan  # unknown: the guard assumes the worst
         else:
             speed_mps = self._speed_mps
         cmd = self.guard.step(Observation(t_s=t, speed_mps=speed_mps, frame=frame, ultrasonic_range_m=range_m))
         self.last_command = cmd
-        limit = finite_number(cmd.speed_limit_mps)
+        limit = finite_reading(cmd.speed_limit_mps)
         limit = 0.0 if limit is None else max(0.0, limit)
         if u is None:
             out_throttle = 0.0
@@ -217,16 +217,16 @@ class FearGuardPart:
             self._speed_mps, out_throttle, dt, full_throttle_mps=limits.max_speed_mps, lag_s=self.speed_lag_s,
             decel_mps2=limits.max_decel_mps2,
         )
-        steering = finite_number(cmd.steering_deg)
+        steering = finite_reading(cmd.steering_deg)
         out_angle = deg_to_donkey(steering, limits.max_steering_deg) if steering is not None else 0.0
-        fear = finite_number(cmd.fear)
+        fear = finite_reading(cmd.fear)
         return out_angle, out_throttle, 1.0 if fear is None else fear, cmd.mode.name, limit
 
 
 def _cfg_number(cfg: Any, key: str, default: float, meaning: str) -> float:
     """A positive finite number from the config, or the default; anything else names the key."""
     value = getattr(cfg, key, default)
-    number = finite_number(value)
+    number = finite_reading(value)
     if number is None or number <= 0:
         raise ValueError(f"Donkey config {key} = {value!r}: expected a number > 0 ({meaning})")
     return number

@@ -23,6 +23,7 @@ from typing import Any
 
 from fearguard.errors import SensorLogError, SensorLogWarning
 from fearguard.reader import loads_json
+from fearguard.readings import reading
 
 MAX_AGE_S = 0.25  # [s] default: a reading older than this is not used for a frame (5 frames at 20 Hz)
 NUMBER_COLUMNS = (
@@ -264,14 +265,10 @@ def _sample(values: dict[str, Any], line: int, report: Report) -> tuple[float, S
 
 def _number(raw: object) -> float | None:
     """A float from a JSON number or numeric text ("1.5", "inf", "nan"); None for anything else (booleans too)."""
-    if isinstance(raw, bool):
-        return None
-    if isinstance(raw, int | float):
-        return float(raw)
     if isinstance(raw, str):
         try:
             return float(raw.strip())
         except ValueError:
             return None
-    return None
+    return reading(raw)
 

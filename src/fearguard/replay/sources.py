@@ -29,6 +29,7 @@ import numpy as np
 
 from fearguard.errors import SourceError
 from fearguard.reader import loads_json
+from fearguard.readings import finite_reading, whole_number
 
 DEFAULT_FPS = 20.0  # [Hz] frame rate assumed when none is known (Donkey Car's default DRIVE_LOOP_HZ)
 MAX_PLAUSIBLE_FPS = 1000.0  # [Hz] a container frame rate above this (or ≤ 0, NaN) is treated as missing
@@ -100,7 +101,7 @@ class FrameSource(ABC):
 
 
 def _is_int(value: object) -> bool:
-    return isinstance(value, int | np.integer) and not isinstance(value, bool)
+    return whole_number(value) is not None
 
 
 def _sampled(index: int, start: int, stop: int | None, every: int) -> bool:
@@ -373,9 +374,7 @@ class TubSource(FrameSource):
 
 def _timestamp_ms(record: Mapping[str, Any]) -> float | None:
     stamp = record.get("_timestamp_ms")
-    if isinstance(stamp, int | float) and not isinstance(stamp, bool) and math.isfinite(stamp):
-        return float(stamp)
-    return None
+    return finite_reading(stamp)
 
 
 def _read_manifest(manifest: Path) -> tuple[list[str], list[str], dict[str, Any]]:
@@ -415,7 +414,7 @@ def _read_manifest(manifest: Path) -> tuple[list[str], list[str], dict[str, Any]
 def open_source(path: str | Path, fps: float | None = None) -> FrameSource:
     """Open a video file, a folder of images, or a Donkey Car tub folder (detected from what is there)."""
     path = Path(path)
-    if fps is not None and not (isinstance(fps, int | float) and not isinstance(fps, bool) and math.isfinite(fps) and fps > 0):
+    if fps is not None and not ((finite_reading(fps) or 0.0) > 0):
         raise SourceError(path, "fps", f"must be a positive number of frames per second, got {fps!r}")
     if not path.exists():
         raise SourceError(path, "", "no such file or folder; give a video file, a folder of images, or a Donkey Car tub folder")

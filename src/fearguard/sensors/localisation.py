@@ -24,7 +24,7 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
-from fearguard.cues import finite_number
+from fearguard.readings import finite_reading, whole_number
 
 MARKER_VERSION = "FG1"  # payload prefix; a later incompatible format gets a new version
 ROUTE_PATTERN = re.compile(r"[A-Za-z0-9_-]+")
@@ -53,12 +53,12 @@ def format_marker(route: str, sector: int, pos_m: float, decimals: int = 1) -> s
     """The FG1 payload for a board (``decimals`` digits of ``pos_m``); ValueError for values it cannot encode."""
     if not isinstance(route, str) or not ROUTE_PATTERN.fullmatch(route):
         raise ValueError(f"route must be letters, digits, '_' or '-', got {route!r}")
-    if isinstance(sector, bool) or not isinstance(sector, int) or not 0 <= sector <= 999_999_999:
+    if whole_number(sector) is None or not 0 <= sector <= 999_999_999:
         raise ValueError(f"sector must be an integer 0..999999999, got {sector!r}")
-    pos = finite_number(pos_m)
+    pos = finite_reading(pos_m)
     if pos is None or pos < 0 or pos >= 1e9:
         raise ValueError(f"pos_m must be a finite number 0 ≤ pos_m < 1e9, got {pos_m!r}")
-    if isinstance(decimals, bool) or not isinstance(decimals, int) or not 0 <= decimals <= 6:
+    if whole_number(decimals) is None or not 0 <= decimals <= 6:
         raise ValueError(f"decimals must be an integer 0..6, got {decimals!r}")
     return f"{MARKER_VERSION};route={route};sector={sector};pos_m={pos:.{decimals}f}"
 
@@ -208,23 +208,23 @@ class QrLocaliser:
         odometer_rel_tol: float = ODOMETER_REL_TOL,
         max_speed_mps: float = MAX_SPEED_MPS,
     ) -> None:
-        spacing = finite_number(marker_spacing_m)
+        spacing = finite_reading(marker_spacing_m)
         if spacing is None or spacing <= 0:
             raise ValueError(f"QrLocaliser marker_spacing_m must be a finite number > 0, got {marker_spacing_m!r}")
         default_tol = min(POSITION_TOLERANCE_M, TOLERANCE_PER_SPACING * spacing)
-        tol = default_tol if position_tolerance_m is None else finite_number(position_tolerance_m)
+        tol = default_tol if position_tolerance_m is None else finite_reading(position_tolerance_m)
         if tol is None or not 0 < tol < spacing / 2:
             raise ValueError(f"QrLocaliser position_tolerance_m must be > 0 and < marker_spacing_m / 2 = {spacing / 2:g} "
                              f"(to tell neighbouring markers apart), got {position_tolerance_m!r}")
-        speed = finite_number(max_speed_mps)
+        speed = finite_reading(max_speed_mps)
         if speed is None or speed <= 0:
             raise ValueError(f"QrLocaliser max_speed_mps must be a finite number > 0, got {max_speed_mps!r}")
-        rel = finite_number(odometer_rel_tol)
+        rel = finite_reading(odometer_rel_tol)
         if rel is None or not 0 <= rel < 1:
             raise ValueError(f"QrLocaliser odometer_rel_tol must be in [0, 1), got {odometer_rel_tol!r}")
         if route is not None and (not isinstance(route, str) or not ROUTE_PATTERN.fullmatch(route)):
             raise ValueError(f"QrLocaliser route must be letters, digits, '_' or '-' (or None), got {route!r}")
-        length = None if route_length_m is None else finite_number(route_length_m)
+        length = None if route_length_m is None else finite_reading(route_length_m)
         if route_length_m is not None and (length is None or length <= 0):
             raise ValueError(f"QrLocaliser route_length_m must be a finite number > 0 (or None), got {route_length_m!r}")
         self.marker_spacing_m = spacing
@@ -250,13 +250,13 @@ class QrLocaliser:
 
     def update(self, t_s: float, payloads: Sequence[str], odometer_m: float | None) -> LocalisationState:
         """Read this frame's payloads at time ``t_s`` with the odometer (m, None/NaN if unknown). Never raises."""
-        t = finite_number(t_s)
+        t = finite_reading(t_s)
         if t is None or (self._t_s is not None and t < self._t_s):
             why = f"time {t_s!r} is not a number" if t is None else f"time {t:.3f} s runs backwards (last {self._t_s:.3f} s)"
             self._last = replace(self._last, reasons=(f"{why}: QR payloads ignored", *self._summary(self._last)))
             return self._last
         self._t_s = t
-        odo = finite_number(odometer_m)
+        odo = finite_reading(odometer_m)
         reasons: list[str] = []
         accepted = [m for m in _markers(payloads, reasons) if self._accept(m, t, odo, reasons)]
         if accepted:

@@ -21,7 +21,7 @@ from enum import Enum
 
 import numpy as np
 
-from fearguard.cues import real_number
+from fearguard import readings
 from fearguard.kalman import kalman_filter, white_noise_q
 
 HALF_SPEED_OF_SOUND_MPS = 171.5  # [m/s] 343 m/s at 20 °C, halved: the echo travels there and back (17150 cm/s)
@@ -82,7 +82,7 @@ class RangeEstimate:
 # -- pure helpers ---------------------------------------------------------------------------
 def echo_to_range_m(echo_s: object) -> float | None:
     """Echo pulse width (s) → range (m) = 171.5 × echo; None for NaN, ≤ 0 or non-numbers (inf stays inf)."""
-    echo = real_number(echo_s)
+    echo = readings.reading(echo_s)
     if echo is None or math.isnan(echo) or echo <= 0:
         return None
     return HALF_SPEED_OF_SOUND_MPS * echo
@@ -92,7 +92,7 @@ def classify_reading(range_m: object, min_range_m: float = HC_SR04_MIN_RANGE_M, 
     """Sort a raw range into none / invalid (with the reason) / clear (nothing in range) / a usable range."""
     if range_m is None:
         return Reading(ReadingKind.NONE, math.nan, "no reading")
-    value = real_number(range_m)
+    value = readings.reading(range_m)
     if value is None:
         return Reading(ReadingKind.INVALID, math.nan, f"reading {_short(range_m)} is not a number")
     if math.isnan(value):
@@ -197,11 +197,15 @@ class UltrasonicFilter:
 
     def _update(self, t_s: object, range_m: object, echo_s: object) -> RangeEstimate:
         reading = self._reading(range_m, echo_s)
-        t = real_number(t_s)
+        t = readings.reading(t_s)
         if t is None or not math.isfinite(t):
             return _unknown(reading.value_m, f"ultrasonic: time t_s={_short(t_s)} is not a finite number: range unknown")
         if self._last_t_s is not None and t <= self._last_t_s:
-            return _unknown(reading.value_m, f"ultrasonic: time did not increase ({self._last_t_s:.3f} s → {t:.3f} s): range unknown")
+            last = self._last_t_s
+            self.reset()  # the clock restarts at t (as the supervisor's does): a wild time stamp cannot stop it for good
+            self._last_t_s = t
+            return _unknown(reading.value_m, f"ultrasonic: time did not increase ({last:.3f} s → {t:.3f} s): range unknown, "
+                                             "filter restarted")
         self._last_t_s = t
         if self._track is not _Track.NONE and t - self._accepted_t_s > self.memory_s + TIME_EPS_S:
             self._track = _Track.NONE  # too old to gate against: the next readings start afresh

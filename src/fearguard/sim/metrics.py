@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from fearguard.cues import finite_number
+from fearguard.readings import finite_reading
 from fearguard.sim.scenario_values import Expectations
 from fearguard.sim.world import Truth
 
@@ -66,7 +66,7 @@ class Metrics:
         """Record one frame (mode/strategy: names, enum members, or None for an unguarded run)."""
         self.rows.append(Row(truth.t_s, truth.x_m, truth.y_m, truth.s_m, truth.lateral_m, truth.speed_mps, truth.gap_m, truth.ttc_s,
                              truth.collided, truth.in_lane, truth.lat_accel_mps2, truth.finished, _name(mode), _name(strategy),
-                             finite_number(speed_limit_mps), finite_number(fear)))
+                             finite_reading(speed_limit_mps), finite_reading(fear)))
 
     @property
     def timeline(self) -> list[dict[str, Any]]:
@@ -258,7 +258,7 @@ def _row_view(row: Any) -> dict[str, Any]:
     """A timeline row as a dict with t_s, mode, strategy, speed_mps, s_m (dicts and objects alike)."""
     get = row.get if isinstance(row, Mapping) else (lambda k, d=None: getattr(row, k, d))
     def num(key: str) -> float:
-        value = finite_number(get(key))
+        value = finite_reading(get(key))
         return math.nan if value is None else value
 
     return {"t_s": num("t_s"), "mode": _name(get("mode")), "strategy": _name(get("strategy")), "speed_mps": num("speed_mps"),

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.cues import finite_number
+from fearguard.readings import finite_reading
 from fearguard.sim import sensors
 from fearguard.sim.bicycle import BicycleLimits, BicycleState, step
 from fearguard.sim.boxes import Box, footprint, overlaps
@@ -117,8 +117,8 @@ class World:
 
         A non-finite steering command holds the current angle; a non-finite speed target brakes to 0.
         """
-        steer = finite_number(steering_deg)
-        target = finite_number(speed_target_mps)
+        steer = finite_reading(steering_deg)
+        target = finite_reading(speed_target_mps)
         steer = self._ego.steering_deg if steer is None else steer
         target = 0.0 if target is None else target
         t = self.t_s

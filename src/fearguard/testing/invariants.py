@@ -22,7 +22,8 @@ import numpy as np
 from hypothesis import strategies as st
 
 import fearguard as fg
-from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens, finite_number
+from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens
+from fearguard.readings import finite_reading
 from fearguard.testing import strategies as fs
 from fearguard.testing.history import Case, FrameSpec, SteerRaises, Step
 from fearguard.testing.subject import HAS_RANGE_RATE, NOT_CALLED, Driver, Run, Subject, run
@@ -77,7 +78,7 @@ def _broken(r: Run) -> str | None:
 
 
 def _t(step: Step) -> float | None:
-    return finite_number(step.t_s)
+    return finite_reading(step.t_s)
 
 
 def _used_range_m(cmd: fg.Command) -> float:
@@ -101,7 +102,7 @@ def _steer_fault(answer: Any, vehicle: fg.VehicleLimits) -> str | None:
         return None
     if isinstance(answer, SteerRaises):
         return f"the steering function raised {answer.exception}"
-    value = finite_number(answer)
+    value = finite_reading(answer)
     if value is None:
         return f"the steering function returned {answer!r}"
     if abs(value) > vehicle.max_steering_deg:
@@ -152,7 +153,7 @@ def stopping_distance_m(v: float, car: fg.VehicleLimits) -> float:
 
 def lead_speed_mps(step: Step, cmd: fg.Command) -> float:
     """Speed of the object ahead the supervisor assumed: ego speed − its closing speed (≥ 0); unknown: 0 (standing)."""
-    closing, speed = getattr(cmd, "closing_speed_mps", math.nan), finite_number(step.speed_mps)
+    closing, speed = getattr(cmd, "closing_speed_mps", math.nan), finite_reading(step.speed_mps)
     if speed is None or not isinstance(closing, float) or not math.isfinite(closing):
         return 0.0
     return max(0.0, speed - closing)
@@ -514,7 +515,7 @@ def check_pass_through(subject: Subject, case: Case) -> str | None:
     for i, (step, cmd, raw) in enumerate(zip(history, r.commands, r.steering_in, strict=True)):
         t = _t(step)
         if cmd.mode is fg.Mode.NORMAL and cmd.fear_level is fg.FearLevel.VERY_LOW:
-            wanted = finite_number(raw)
+            wanted = finite_reading(raw)
             if cmd.strategy is not fg.Strategy.PASS_THROUGH or wanted is None:
                 return f"frame {i}: NORMAL at VERY_LOW fear, the steering function said {raw!r} deg but the command is {_cmd_text(cmd)}"
             if cmd.steering_deg != wanted:
