@@ -7,6 +7,7 @@ unsafe command or internal error fails the test with examples.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib.util
 import sys
 import warnings
@@ -58,3 +59,36 @@ def test_the_oracle_catches_an_unsafe_command_and_an_unreported_fault(campaign) 
                           fg.Cues(*[math.nan] * 5), ("fault: internal error ValueError: x",))
     campaign.judge(internal, vehicle, campaign.Injected(), tally)
     assert sum(tally.internal_errors.values()) == 1 and not tally.clean
+
+
+# -- the same oracle over the testing kit's public strategies (fearguard.testing) ----------------
+try:
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from fearguard.testing import strategies as kit
+except ImportError:  # pragma: no cover - hypothesis is a test dependency
+    kit = None
+
+
+if kit is not None:
+    import fearguard as fg
+
+    CAR = fg.VehicleLimits(has_ultrasonic=True, has_qr_localisation=True)
+
+    @settings(max_examples=150, derandomize=True, deadline=None)
+    @given(history=st.lists(st.one_of(kit.observations(vehicle=CAR), kit.observations(vehicle=CAR, level="frame")),
+                            min_size=1, max_size=6),
+           bad=kit.non_numbers(), field=st.integers(0, 4), steer=kit.steering_outputs(CAR))
+    def test_kit_observations_with_a_non_number_cue_keep_every_invariant(campaign, history, bad, field, steer) -> None:
+        guard = fg.FearGuard(lambda frame: steer, vehicle=CAR)
+        tally = campaign.Tally()
+        for obs in history:
+            injected = campaign.Injected()
+            if obs.cues is not None:
+                values = list(obs.cues.values())
+                values[field] = bad
+                obs = dataclasses.replace(obs, cues=fg.Cues(*values))
+                injected = campaign.Injected(non_number_cues=(field,))
+            campaign.judge(guard.step(obs), CAR, injected, tally)
+        assert tally.clean, tally.examples
