@@ -113,9 +113,13 @@ def fear_speed_mps(fear: float, level_anchors: np.ndarray, cfg: PolicyConfig, ve
 
 
 def stopping_distance_m(speed_mps: float, vehicle: VehicleLimits) -> float:
-    """Distance to stop from speed: reaction distance plus braking distance v²/2a (v·v: an absurd speed gives
-    inf, where ``v**2`` raises OverflowError)."""
-    return speed_mps * vehicle.reaction_time_s + speed_mps * speed_mps / (2.0 * vehicle.max_decel_mps2)
+    """Distance to stop from speed: reaction distance plus braking distance v²/2a (inf for a speed whose square
+    is beyond the float range)."""
+    try:
+        braking_m = speed_mps**2 / (2.0 * vehicle.max_decel_mps2)
+    except OverflowError:  # e.g. a measured speed of 1e200 m/s: no stop is possible
+        braking_m = math.inf
+    return speed_mps * vehicle.reaction_time_s + braking_m
 
 
 def envelope_speed_mps(range_m: float, vehicle: VehicleLimits) -> float:

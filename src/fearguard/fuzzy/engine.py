@@ -162,9 +162,9 @@ class Engine:
         # each level's support as a slice: the batch path only touches the points a level can raise
         self.supports = [slice(int(np.flatnonzero(mf > 0)[0]), int(np.flatnonzero(mf > 0)[-1]) + 1) for mf in self.out_mf]
         self.centroid_w = np.column_stack(centroid_weights(rb.fear_variable.universe))  # (points, [area, moment])
-        area_w, moment_w = self.centroid_w.T
+        area_w, moment_w = centroid_weights(rb.fear_variable.universe)  # contiguous: the same sums as ever, bit for bit
         # fear when only that level fires fully: the centroid of each level's term
-        self.level_anchors = np.array([float(mf @ moment_w) / float(mf @ area_w) for mf in self.out_mf])
+        self.level_anchors = np.array([float(mf @ moment_w) / float(mf @ area_w) for mf in rb.fear_variable.terms.values()])
         mf = self.out_mf
         self.closed_form = int((mf > 0).sum(axis=0).max()) <= 2  # at most two fear terms overlap anywhere
         self.level_sums = [_ClipSum(g, self.centroid_w) for g in mf]
