@@ -229,6 +229,16 @@ def test_deep_json_in_a_tub_manifest_or_catalog_is_a_source_error_or_a_skip(tmp_
     assert "64-bit" in source.skipped[1].reason
 
 
+def test_fuzz_found_tub_records_naming_an_impossible_file_or_a_manifest_without_deleted_indexes(tmp_path: Path) -> None:
+    records = [_record(0), _record(1).replace("1_cam_image_array_.jpg", "9" * 400 + ".jpg"), _record(2)]
+    source = open_source(_tub(tmp_path / "a", records))
+    assert [f.index for f in source.iter_frames()] == [0, 2] and "cannot be read" in source.skipped[0].reason
+    tub = _tub(tmp_path / "b", [_record(0)])
+    manifest = (tub / "manifest.json").read_text().replace(', "deleted_indexes": []', "")
+    (tub / "manifest.json").write_text(manifest)
+    assert [f.index for f in open_source(tub).iter_frames()] == [0]
+
+
 # -- 5: internal errors that are really bad input ---------------------------------------------
 class BrokenFloat:
     def __float__(self) -> float:

@@ -14,6 +14,7 @@ shifts neither the indices nor ``t_s`` of the frames after it.
 from __future__ import annotations
 
 import math
+import os
 import re
 import statistics
 from abc import ABC, abstractmethod
@@ -233,8 +234,8 @@ def _read_image(path: Path) -> tuple[np.ndarray | None, str]:
     """Decode an image file to 8-bit BGR, or (None, why not)."""
     try:
         data = np.fromfile(path, dtype=np.uint8)  # fromfile + imdecode: cv2.imread fails on non-ASCII paths on Windows
-    except OSError:
-        return None, "is missing" if not path.exists() else "cannot be read"
+    except OSError as exc:  # also a name too long to exist: asking path.exists() would raise again
+        return None, "is missing" if isinstance(exc, FileNotFoundError) else f"cannot be read ({exc.strerror})"
     if data.size == 0:
         return None, "is empty"
     image = cv2.imdecode(data, cv2.IMREAD_COLOR)
@@ -286,7 +287,7 @@ class TubSource(FrameSource):
             raise SourceError(manifest, "lines 1-2", f"no input of type 'image_array' among {inputs}: this tub holds no camera images")
         self.image_key = "cam/image_array" if "cam/image_array" in image_keys else image_keys[0]
         self.image_keys = frozenset(image_keys)
-        self.deleted_indexes = frozenset(catalog_meta["deleted_indexes"])
+        self.deleted_indexes = frozenset(catalog_meta.get("deleted_indexes", []))
         self.catalogs = tuple(path / name for name in catalog_meta["paths"])
         for catalog in self.catalogs:
             if not catalog.is_file():
@@ -322,7 +323,7 @@ class TubSource(FrameSource):
 
     def _image_path(self, name: str) -> Path:
         inside = self.images_dir / name
-        if not inside.exists() and "/" in name:  # some tools store "images/0_cam_image_array_.jpg"
+        if not os.path.exists(inside) and "/" in name:  # e.g. "images/0_cam_image_array_.jpg"; False for a too-long name
             return self.path / name
         return inside
 
