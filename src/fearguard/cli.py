@@ -1,7 +1,10 @@
 """Command line: ``demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``suite``, ``verify``, ``duckietown``.
 
 A thin layer: it parses arguments, calls the library, prints, and maps errors to exit codes
-(0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr).
+(0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr, 130 / 143 interrupted by SIGINT /
+SIGTERM). Signals follow one policy (``interrupt.py``): the frame loops (replay, run, suite) finish the
+current frame and write everything with ``"interrupted": true``; other commands stop at once. The
+library is imported only after the handlers are installed, so a Ctrl-C during start-up is handled too.
 """
 
 from __future__ import annotations
@@ -11,15 +14,20 @@ import importlib
 import math
 import sys
 import time
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-from fearguard.cues import CUE_NAMES, Cues
 from fearguard.errors import FearguardError
-from fearguard.fuzzy.check import check_rules
-from fearguard.fuzzy.loader import load_rules
-from fearguard.observation import Lead, Observation
-from fearguard.supervisor import FearGuard
+from fearguard.interrupt import StopSignal, stop_on_signals
+
+if TYPE_CHECKING:
+    from fearguard.cues import Cues
+    from fearguard.observation import Lead
+    from fearguard.supervisor import FearGuard
+
+FRAME_LOOPS = ("replay", "run", "suite")  # commands that finish the current frame on a signal
+VIDEO_HELP = "also write the annotated video (annotated.mp4, H.264; annotated.avi, MJPG, without the video extra)"
 
 EXPLAIN_SETTLE_S = 10.0  # [s] explain shows the command after this long with the same cues
 EXPLAIN_RATE_HZ = 10.0  # [Hz] frame rate of that settling run
@@ -27,6 +35,8 @@ CALM = {"lane_confidence": 0.9, "brightness": 120.0, "occlusion": 0.0, "obstacle
 
 
 def _parse_cues(text: str) -> Cues:
+    from fearguard.cues import CUE_NAMES, Cues
+
     values = dict(CALM)
     for item in filter(None, (p.strip() for p in text.split(","))):
         name, sep, raw = item.partition("=")
@@ -41,6 +51,8 @@ def _parse_cues(text: str) -> Cues:
 
 def _settle(guard: FearGuard, cues: Cues, lead: Lead | None) -> object:
     """Run the guard on constant cues, the car driving at the limit, and return the last command."""
+    from fearguard.observation import Observation
+
     speed, cmd = 0.0, None
     for k in range(int(EXPLAIN_SETTLE_S * EXPLAIN_RATE_HZ) + 1):
         cmd = guard.step(Observation(t_s=k / EXPLAIN_RATE_HZ, speed_mps=speed, cues=cues, lead=lead))
@@ -49,12 +61,17 @@ def _settle(guard: FearGuard, cues: Cues, lead: Lead | None) -> object:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
+    from fearguard.fuzzy.check import check_rules
+    from fearguard.fuzzy.loader import load_rules
+
     report = check_rules(load_rules(args.file))
     print("\n".join(report.lines()))
     return 0 if report.ok else 1
 
 
 def cmd_plot(args: argparse.Namespace) -> int:
+    from fearguard.fuzzy.loader import load_rules
+
     plot_rules = _desktop("fearguard.plot", "plots").plot_rules
 
     for path in plot_rules(load_rules(args.file), args.out):
@@ -63,6 +80,11 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
 
 def cmd_explain(args: argparse.Namespace) -> int:
+    from fearguard.cues import CUE_NAMES
+    from fearguard.fuzzy.loader import load_rules
+    from fearguard.observation import Lead
+    from fearguard.supervisor import FearGuard
+
     rules = load_rules(args.rules)
     cues = _parse_cues(args.cues)
     result = rules.evaluate(cues)
@@ -85,6 +107,7 @@ def cmd_explain(args: argparse.Namespace) -> int:
 def cmd_demo(args: argparse.Namespace) -> int:
     """A scripted cue-level drive through each hazard: what the supervisor does, frame by frame."""
     from fearguard.demo import demo_drive
+    from fearguard.fuzzy.loader import load_rules
 
     for line in demo_drive(load_rules(args.rules)):
         print(line)
@@ -93,8 +116,6 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """Chessboard photos → camera.toml: found/missed per image, the RMS reprojection error, the intrinsics."""
-    from pathlib import Path
-
     from fearguard.calibration import CalibrationError, calibrate_chessboard, expand_image_paths, parse_pattern
     from fearguard.camera import save_camera
 
@@ -165,9 +186,14 @@ def cmd_replay(args: argparse.Namespace) -> int:
         every=args.every, video=args.video, plots=not args.no_plots,
     )
     with _Progress("replay") as progress:
-        result = replay(args.recording, args.out, options, on_frame=progress.update)
+        result = replay(args.recording, args.out, options, on_frame=progress.update, stop=args.stop)
     _print_replay_summary(result.summary, result.out_dir)
-    return 130 if result.interrupted else 0
+    return _interrupted_exit(args.stop) if result.interrupted else 0
+
+
+def _interrupted_exit(stop: StopSignal) -> int:
+    """128 + the signal's number (130 for a KeyboardInterrupt raised without a handler)."""
+    return stop.exit_code or 130
 
 
 def _print_replay_summary(summary: dict, out_dir: object) -> None:
@@ -191,51 +217,74 @@ def _print_replay_summary(summary: dict, out_dir: object) -> None:
     for issue in summary.get("sensor_log_issues", [])[:10]:
         print(f"sensor log line {issue['line']}: {issue['problem']} (skipped)")
     if summary.get("interrupted"):
-        print("interrupted: the log holds every frame processed so far")
-    print(f"wrote {out_dir}/log.jsonl, summary.json" + (", timeline.png" if summary.get("frames") else ""))
+        print(f"interrupted{_by(summary)}: the log holds every frame processed so far")
+    plotted = summary.get("frames") and not summary.get("interrupted") and (Path(str(out_dir)) / "timeline.png").is_file()
+    print(f"wrote {out_dir}/log.jsonl, summary.json" + (", timeline.png" if plotted else ""))
+    video = summary.get("video")
+    if video:
+        rescaled = f", {video['rescaled_frames']} frame(s) of another size scaled to the first" if video["rescaled_frames"] else ""
+        print(f"video {video['path']} ({video['frames']} frames{rescaled})")
+
+
+def _by(summary: dict) -> str:
+    return f" by {summary['stopped_by']}" if summary.get("stopped_by") else ""
 
 
 def cmd_run(args: argparse.Namespace) -> int:
-    """One scenario closed loop → log.jsonl, summary.json, plots (and annotated.mp4); exit 1 if an expectation fails."""
-    from pathlib import Path
-
+    """One scenario closed loop → log.jsonl, summary.json, plots (and the video); exit 1 if an expectation fails."""
     from fearguard.sim.scenario import load_scenario
     from fearguard.sim.suite import run_to_folder
 
     scenario = load_scenario(args.scenario)
     controller = "unguarded" if args.unguarded else (args.baseline or "guarded")
     with _Progress(scenario.name) as progress:
-        result = run_to_folder(scenario, Path(args.out), args.seed, controller, args.video, progress.update)
-    s = result.summary
-    print(f"{scenario.name} ({controller}, seed {result.seed}): {result.frames} frames, {s.get('distance_m', 0):.1f} m, "
-          f"mean speed {s.get('mean_speed_mps', 0):.2f} m/s, collisions {s.get('collisions')}, lane departures {s.get('lane_departures')}, "
-          f"emergency entries {s.get('emergency_entries')}")
-    for e in result.expectations:
-        print(f"  {'ok  ' if e['ok'] else 'FAIL'} {e['name']}: {e['detail']}")
-    print(f"wrote {args.out}/log.jsonl, summary.json, timeline/trajectory plots" + (", annotated.mp4" if args.video else ""))
+        result = run_to_folder(scenario, Path(args.out), args.seed, controller, args.video, progress.update, stop=args.stop)
+    m = result.metrics
+    print(f"{scenario.name} ({controller}, seed {result.seed}): {result.frames} frames, {m.distance_m:.1f} m, "
+          f"mean speed {m.mean_speed_mps or 0.0:.2f} m/s, collisions {m.collisions}, lane departures {m.lane_departures}, "
+          f"emergency entries {m.emergency_entries}")
     if result.interrupted:
-        return 130
+        by = f" by {result.stopped_by}" if result.stopped_by else ""
+        print(f"interrupted{by} after {result.frames} frames: the expectations are not judged on a cut-short run "
+              "(summary.json says interrupted, passed false)")
+    else:
+        for e in result.expectations:
+            print(f"  {'ok  ' if e.ok else 'FAIL'} {e.name}: {e.detail}")
+    print(f"wrote {args.out}/log.jsonl, summary.json" + ("" if result.interrupted else ", timeline/trajectory plots"))
+    if result.video_path is not None:
+        print(f"video {result.video_path}")
+    if result.interrupted:
+        return _interrupted_exit(args.stop)
     return 0 if result.passed else 1
 
 
 def cmd_suite(args: argparse.Namespace) -> int:
-    """Every scenario guarded and with the baselines → a comparison table (markdown + JSON); exit 1 if guarded fails."""
-    import json
-    from pathlib import Path
+    """Every scenario guarded and with the baselines → a comparison table (markdown + JSON); exit 1 if guarded fails.
 
+    Each finished run is appended to runs.jsonl at once; ``--resume`` skips the runs already there.
+    """
+    from fearguard.recorder import write_json
     from fearguard.sim.suite import run_suite, scenario_files, suite_markdown, suite_table
 
     files = scenario_files(args.folder)
     if not files:
         raise FearguardError(f"suite: no *.toml scenarios in {args.folder}; give a folder of scenario files")
-    rows = run_suite(files, args.seeds, on_run=print if args.verbose else None)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    progress = run_suite(files, args.seeds, on_run=print if args.verbose else None, runs_log=out / "runs.jsonl", resume=args.resume,
+                         stop=args.stop)
+    rows = progress.rows
     markdown = suite_markdown(rows)
     (out / "suite.md").write_text(markdown, encoding="utf-8")
-    (out / "suite.json").write_text(json.dumps({"runs": rows, "table": suite_table(rows)}, indent=2) + "\n", encoding="utf-8")
+    write_json(out / "suite.json", {"interrupted": progress.interrupted, "stopped_by": progress.stopped_by,
+                                    "planned_runs": progress.planned, "finished_runs": len(rows), "resumed_runs": progress.resumed,
+                                    "runs": rows, "table": suite_table(rows)})
     print(markdown)
-    print(f"wrote {out}/suite.md, suite.json")
+    print(f"wrote {out}/runs.jsonl, suite.md, suite.json ({len(rows)} of {progress.planned} runs"
+          + (f", {progress.resumed} resumed)" if progress.resumed else ")"))
+    if progress.interrupted:
+        print(f"interrupted by {progress.stopped_by}: the table holds the finished runs; run the same command with --resume to go on")
+        return _interrupted_exit(args.stop)
     return 0 if all(r["passed"] for r in rows if r["controller"] == "guarded") else 1
 
 
@@ -292,6 +341,32 @@ def cmd_duckietown_suite(args: argparse.Namespace) -> int:
     return 0
 
 
+def _count(minimum: int) -> Callable[[str], int]:
+    """An argparse type: a whole number >= minimum (a clear usage error, exit 2, before anything runs)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {value}")
+        return value
+
+    return parse
+
+
+def _out_folder(text: str) -> str:
+    """An argparse type: a folder to write into; an existing file there (or above it) is a usage error, exit 2."""
+    path = Path(text)
+    for where in (path, *path.parents):
+        if where.exists():
+            if not where.is_dir():
+                raise argparse.ArgumentTypeError(f"{where} is a file, not a folder; give a folder to write the outputs into")
+            break
+    return text
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fearguard", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -305,7 +380,7 @@ def build_parser() -> argparse.ArgumentParser:
     check.set_defaults(func=cmd_check)
     plot = rsub.add_parser("plot", help="membership functions and fear surfaces as PNG")
     plot.add_argument("file", nargs="?", default=None)
-    plot.add_argument("--out", required=True, help="directory for the PNG files")
+    plot.add_argument("--out", required=True, type=_out_folder, help="directory for the PNG files")
     plot.set_defaults(func=cmd_plot)
     explain = rsub.add_parser("explain", help="fear, level, top rules and the command for given cues")
     explain.add_argument("--cues", required=True, help="e.g. lane_confidence=0.2,occlusion=0.8 (others calm)")
@@ -324,7 +399,7 @@ def build_parser() -> argparse.ArgumentParser:
     calibrate.set_defaults(func=cmd_calibrate)
     rp = sub.add_parser("replay", help="a recorded drive (video, image folder, Donkey tub) through the supervisor, open loop")
     rp.add_argument("recording", help="video file, folder of images, or Donkey Car tub folder")
-    rp.add_argument("--out", required=True, help="output folder (log.jsonl, summary.json, timeline.png, annotated.mp4)")
+    rp.add_argument("--out", required=True, type=_out_folder, help="output folder (log.jsonl, summary.json, timeline.png, the video)")
     rp.add_argument("--sensor-log", default=None, help="CSV or JSON Lines with t_s and sensor columns, aligned by time")
     rp.add_argument("--strict", action="store_true", help="reject a sensor log with any malformed line (default: report and skip)")
     rp.add_argument("--camera", default=None, help="camera.toml from `fearguard calibrate`")
@@ -335,23 +410,24 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--fps", type=float, default=None, help="frame rate of an image folder (or to override a video's)")
     rp.add_argument("--from", dest="from_", default=None, help="start: seconds ('12.5s') or a frame ('300f')")
     rp.add_argument("--to", default=None, help="end (exclusive): seconds or a frame")
-    rp.add_argument("--every", type=int, default=1, help="process every N-th frame")
-    rp.add_argument("--video", action="store_true", help="also write annotated.mp4")
+    rp.add_argument("--every", type=_count(1), default=1, help="process every N-th frame (N >= 1)")
+    rp.add_argument("--video", action="store_true", help=VIDEO_HELP)
     rp.add_argument("--no-plots", action="store_true", help="skip timeline.png")
     rp.set_defaults(func=cmd_replay)
     run = sub.add_parser("run", help="one scenario closed loop: rendered frames → perception → supervisor → car")
     run.add_argument("scenario", help="scenario file (TOML), e.g. scenarios/night.toml")
-    run.add_argument("--seed", type=int, default=None, help="random seed (default: the scenario's)")
+    run.add_argument("--seed", type=_count(0), default=None, help="random seed >= 0 (default: the scenario's)")
     who = run.add_mutually_exclusive_group()
     who.add_argument("--unguarded", action="store_true", help="no supervisor: cruise speed, the estimator alone")
     who.add_argument("--baseline", choices=("unguarded", "crisp", "aeb"), default=None, help="a baseline speed rule instead of fearguard")
-    run.add_argument("--out", required=True, help="output folder")
-    run.add_argument("--video", action="store_true", help="also write annotated.mp4")
+    run.add_argument("--out", required=True, type=_out_folder, help="output folder")
+    run.add_argument("--video", action="store_true", help=VIDEO_HELP)
     run.set_defaults(func=cmd_run)
     suite = sub.add_parser("suite", help="every scenario guarded and with the baselines: a comparison table")
     suite.add_argument("folder", nargs="?", default=None, help="folder of scenario files (default: the bundled library)")
-    suite.add_argument("--seeds", type=int, default=10, help="seeds per scenario (default 10)")
-    suite.add_argument("--out", required=True, help="output folder for suite.md and suite.json")
+    suite.add_argument("--seeds", type=_count(1), default=10, help="seeds per scenario, >= 1 (default 10)")
+    suite.add_argument("--out", required=True, type=_out_folder, help="output folder for runs.jsonl, suite.md and suite.json")
+    suite.add_argument("--resume", action="store_true", help="skip the runs already in OUT/runs.jsonl (after an interruption)")
     suite.add_argument("--verbose", action="store_true", help="print each run as it finishes")
     suite.set_defaults(func=cmd_suite)
     verify = sub.add_parser("verify", help="search every safety invariant with hypothesis for your rules, vehicle and steering")
@@ -395,15 +471,25 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    try:
-        return int(args.func(args))
-    except FearguardError as exc:
-        print(f"{type(exc).__name__}: {exc}", file=sys.stderr)
-        return 2
-    except BrokenPipeError:  # output piped into `head`: stop quietly
-        sys.stderr.close()
-        return 0
+    with stop_on_signals(StopSignal(raise_at_once=True)) as stop:  # before anything else: a Ctrl-C from here on is ours
+        try:
+            args = build_parser().parse_args(argv)
+            args.stop = stop
+            stop.raise_at_once = args.command not in FRAME_LOOPS
+            code = int(args.func(args))
+            if stop:  # the signal came after the work was done and written: still say so in the exit code
+                print(f"interrupted by {stop.name} (after the work was done)", file=sys.stderr)
+                return _interrupted_exit(stop)
+            return code
+        except FearguardError as exc:
+            print(f"{type(exc).__name__}: {exc}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:
+            print(f"interrupted{f' by {stop.name}' if stop else ''}", file=sys.stderr)
+            return _interrupted_exit(stop)
+        except BrokenPipeError:  # output piped into `head`: stop quietly
+            sys.stderr.close()
+            return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -77,22 +77,3 @@ def _draw_gauge(out: np.ndarray, fear: float, boxes: list[TextBox]) -> None:
     f = min(1.0, max(0.0, fear))
     filled = int((bottom - top) * f)
     cv2.rectangle(out, (x0, bottom - filled), (x0 + bar_w, bottom), (0, int(255 * (1 - f)), int(255 * f)), -1)
-
-
-class VideoOut:
-    """An MP4 writer that opens on the first frame (its size) and closes cleanly on any exit."""
-
-    def __init__(self, path: str, fps: float) -> None:
-        self.path, self.fps = path, fps if fps > 0 else 20.0
-        self._writer: cv2.VideoWriter | None = None
-
-    def write(self, frame: np.ndarray) -> None:
-        if self._writer is None:
-            h, w = frame.shape[:2]
-            self._writer = cv2.VideoWriter(self.path, cv2.VideoWriter_fourcc(*"mp4v"), self.fps, (w, h))
-        self._writer.write(frame)
-
-    def close(self) -> None:
-        if self._writer is not None:
-            self._writer.release()
-            self._writer = None

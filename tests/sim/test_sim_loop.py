@@ -27,35 +27,35 @@ def test_the_library_has_every_scenario_the_issue_asks_for():
 @pytest.mark.parametrize("path", SCENARIOS, ids=[p.stem for p in SCENARIOS])
 def test_guarded_run_meets_every_expectation(path: Path):
     result = run_scenario(load_scenario(path))
-    failed = [f"{e['name']}: {e['detail']}" for e in result.expectations if not e["ok"]]
+    failed = [f"{e.name}: {e.detail}" for e in result.expectations if not e.ok]
     assert not failed, failed
-    assert result.summary["collisions"] == 0 and result.summary["lane_departures"] == 0
+    assert result.metrics.collisions == 0 and result.metrics.lane_departures == 0
 
 
 @pytest.mark.parametrize("name", ["stationary_obstacle", "occluding_traffic_follow_lead", "unmarked_hill"])
 def test_the_unguarded_car_fails_the_hazard(name: str):
     result = run_scenario(load_scenario(Path(SCENARIOS[0]).parent / f"{name}.toml"), controller="unguarded")
     assert not result.passed
-    assert result.summary["collisions"] + result.summary["lane_departures"] >= 1
+    assert result.metrics.collisions + result.metrics.lane_departures >= 1
 
 
 @pytest.mark.parametrize("name", BENIGN)
 def test_benign_scenarios_no_false_alarm_and_at_least_95_percent_of_unguarded_speed(name: str):
     scenario = load_scenario(Path(SCENARIOS[0]).parent / f"{name}.toml")
     guarded, unguarded = run_scenario(scenario), run_scenario(scenario, controller="unguarded")
-    assert guarded.summary["emergency_entries"] == 0
-    assert guarded.summary["mean_speed_mps"] >= 0.95 * unguarded.summary["mean_speed_mps"]
+    assert guarded.metrics.emergency_entries == 0
+    assert guarded.metrics.mean_speed_mps >= 0.95 * unguarded.metrics.mean_speed_mps
 
 
 def test_same_seed_same_log_byte_for_byte(tmp_path: Path):
     scenario = load_scenario(Path(SCENARIOS[0]).parent / "stationary_obstacle.toml")
     logs = []
     for k in range(2):
-        run_scenario(scenario, seed=3, log_path=tmp_path / f"log{k}.jsonl")
-        logs.append((tmp_path / f"log{k}.jsonl").read_bytes())
+        run_scenario(scenario, seed=3, out_dir=tmp_path / f"run{k}")
+        logs.append((tmp_path / f"run{k}" / "log.jsonl").read_bytes())
     assert logs[0] == logs[1] and len(logs[0]) > 1000
-    run_scenario(scenario, seed=4, log_path=tmp_path / "other.jsonl")
-    assert (tmp_path / "other.jsonl").read_bytes() != logs[0]
+    run_scenario(scenario, seed=4, out_dir=tmp_path / "other")
+    assert (tmp_path / "other" / "log.jsonl").read_bytes() != logs[0]
 
 
 def test_cli_run_writes_log_summary_plots_and_video(tmp_path: Path, capsys):
@@ -82,7 +82,7 @@ def test_cli_run_exit_1_when_an_expectation_fails_and_2_on_a_bad_file(tmp_path: 
 
 
 def test_suite_table_compares_guarded_with_baselines(tmp_path: Path):
-    rows = run_suite([Path(SCENARIOS[0]).parent / "stationary_obstacle.toml"], seeds=1)
+    rows = run_suite([Path(SCENARIOS[0]).parent / "stationary_obstacle.toml"], seeds=1).rows
     assert {r["controller"] for r in rows} == {"guarded", "unguarded", "crisp", "aeb"}
     table = suite_markdown(rows)
     assert "| stationary_obstacle |" in table and "unguarded" in table.splitlines()[0]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -71,7 +72,7 @@ def test_no_object_ahead_gives_null_gap() -> None:
 
 
 def results(expect: Expectations, metrics: Metrics) -> dict[str, tuple[bool, str]]:
-    return {r.name: (r.ok, r.detail) for r in check_expectations(expect, metrics.summary(), metrics.timeline)}
+    return {r.name: (r.ok, r.detail) for r in check_expectations(expect, metrics.result(), metrics.rows)}
 
 
 def test_expectations_pass_and_fail_on_the_hand_made_run() -> None:
@@ -121,15 +122,34 @@ def test_mode_expectations_fail_clearly_on_an_unguarded_run() -> None:
     assert got["no_emergency"] == (True, "no supervisor (unguarded run): no mode, so no false alarm")
 
 
-def test_timeline_rows_may_be_plain_dicts_with_enum_members() -> None:
-    timeline = [{"t_s": 0.0, "mode": Mode.NORMAL, "strategy": Strategy.PASS_THROUGH, "speed_mps": 1.0, "s_m": 0.0},
-                {"t_s": 0.5, "mode": "EMERGENCY", "strategy": "STOP", "speed_mps": 0.5, "s_m": 0.5}]
-    got = check_expectations(Expectations(mode_by=(ModeBy(0.5, "EMERGENCY"),)), {}, timeline)
+def test_modes_may_be_given_as_enum_members_or_names() -> None:
+    m = Metrics()
+    m.add(truth(0, 1.0), Mode.NORMAL, Strategy.PASS_THROUGH)
+    m.add(truth(1, 0.5), "EMERGENCY", "STOP")
+    got = check_expectations(Expectations(mode_by=(ModeBy(0.5, "EMERGENCY"),)), m.result(), m.rows)
     assert [(r.ok, r.detail) for r in got] == [(True, "first EMERGENCY at 0.50 s")]
+    assert [r.mode for r in m.rows] == ["NORMAL", "EMERGENCY"]
 
 
-def test_malformed_timeline_rows_do_not_raise() -> None:
-    timeline = [{"t_s": "soon", "mode": None}, object(), {"t_s": 1.0, "mode": "EMERGENCY", "speed_mps": None}]
-    got = check_expectations(Expectations(mode_by=(ModeBy(2.0, "EMERGENCY"),), max_speed_between=(SpeedCap(1.0, t_s=0.0, until_s=5.0),)),
-                             {}, timeline)
-    assert [r.ok for r in got] == [True, False]  # an unknown speed cannot show the cap was kept
+def test_an_unknown_speed_cannot_show_a_cap_was_kept() -> None:
+    m = Metrics()
+    m.add(truth(0, math.nan), "EMERGENCY", "STOP")
+    got = check_expectations(Expectations(max_speed_between=(SpeedCap(1.0, t_s=0.0, until_s=5.0),)), m.result(), m.rows)
+    assert [r.ok for r in got] == [False]
+
+
+def test_there_is_one_checker_per_expectation_in_the_order_they_are_checked() -> None:
+    from fearguard.sim.metrics import CHECKS
+    from fearguard.sim.scenario_values import EXPECTATION_NAMES
+
+    assert tuple(CHECKS) == EXPECTATION_NAMES == tuple(f.name for f in dataclasses.fields(Expectations))
+
+
+def test_a_run_without_frames_summarises_to_the_counts_only() -> None:
+    s = Metrics().summary()
+    assert s == {"frames": 0, "duration_s": 0.0, "distance_m": 0.0, "guarded": False, "collisions": 0, "lane_departures": 0,
+                 "time_outside_lane_s": 0.0, "emergency_entries": 0, "mode_switches": 0,
+                 "time_in_mode_s": {"NORMAL": 0.0, "CAUTION": 0.0, "EMERGENCY": 0.0}, "stops": []}
+    got = results(Expectations(min_mean_speed_mps=0.1, max_mean_speed_mps=1.0, min_gap_m=0.1), Metrics())
+    unknown = (False, "not measured (m/s mean speed)")
+    assert got == {"min_mean_speed_mps": unknown, "max_mean_speed_mps": unknown, "min_gap_m": (True, "no object ahead at any time")}

@@ -2,14 +2,14 @@
 
 Frames (video, image folder or Donkey tub) and an optional sensor log aligned by time go through the
 wrapped steering estimator (HoughLaneSteering) and the supervisor, frame by frame. Outputs in the
-out folder: ``log.jsonl`` (one flushed line per frame), ``summary.json``, ``timeline.png`` and, if
-asked, ``annotated.mp4``. Sensors are what the recording has: the car has an ultrasonic when the
-sensor log has a range or echo column (unless ``no_ultrasonic``), QR localisation when asked.
+out folder, through ``recorder.Recorder``: ``log.jsonl`` (one flushed line per frame), ``summary.json``,
+``timeline.png`` and, if asked, the annotated video (``annotated.mp4``; ``annotated.avi`` without PyAV).
+Sensors are what the recording has: the car has an ultrasonic when the sensor log has a range or echo
+column (unless ``no_ultrasonic``), QR localisation when asked.
 """
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable
@@ -19,11 +19,12 @@ from typing import Any
 
 from fearguard.camera import CameraModel, load_camera
 from fearguard.fuzzy.loader import load_rules
+from fearguard.interrupt import StopSignal
 from fearguard.observation import LeadBox, Observation
-from fearguard.overlay import VideoOut, annotate
+from fearguard.recorder import CommandStats, Recorder
 from fearguard.replay.sensor_log import SensorLog, load_sensor_log
-from fearguard.replay.sources import open_source, parse_position
-from fearguard.report import JsonlLog, command_record, json_value, plot_timeline, read_jsonl, summarize
+from fearguard.replay.sources import SourceError, open_source, parse_position
+from fearguard.report import json_value
 from fearguard.supervisor import FearGuard
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.lane_steering import HoughLaneSteering
@@ -51,14 +52,23 @@ class ReplayOptions:
 
 @dataclass(frozen=True)
 class ReplayResult:
-    summary: dict[str, Any]
+    summary: dict[str, Any]  # summary.json as written
     out_dir: Path
     interrupted: bool
+    stats: CommandStats | None = None  # the supervisor's commands over the replay, typed
+    video_path: Path | None = None
+    stopped_by: str | None = None
 
 
 def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions = ReplayOptions(),
-           on_frame: Callable[[int, int | None], None] | None = None) -> ReplayResult:
-    """Run the supervisor over a recording; files in out_dir; a Ctrl-C stops cleanly with everything written so far."""
+           on_frame: Callable[[int, int | None], None] | None = None, stop: StopSignal | None = None) -> ReplayResult:
+    """Run the supervisor over a recording; files in out_dir.
+
+    ``stop`` (``interrupt.stop_on_signals``) or a KeyboardInterrupt ends the replay after the current
+    frame, with everything written so far and a summary that says ``interrupted``.
+    """
+    if not (isinstance(options.every, int) and options.every >= 1):
+        raise SourceError(str(source_path), "every", f"must be a whole number >= 1, got {options.every!r}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     source = open_source(source_path, options.fps)
@@ -69,35 +79,32 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     steer = HoughLaneSteering(camera=camera, fps=source.fps)
     guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera)
     start = parse_position(options.start, source.fps) if options.start else 0
-    stop = parse_position(options.stop, source.fps) if options.stop else None
-    video = VideoOut(str(out / "annotated.mp4"), source.fps / options.every) if options.video else None
-    expected = _expected(source.expected_frames, start, stop, options.every)
-    log = JsonlLog(out / "log.jsonl")
-    interrupted, done, began = False, 0, time.perf_counter()
+    stop_at = parse_position(options.stop, source.fps) if options.stop else None
+    expected = _expected(source.expected_frames, start, stop_at, options.every)
+    frames = source.iter_frames(start, stop_at, options.every)
+    interrupted, began = False, time.perf_counter()
+    recorder = Recorder(out, fps=source.fps / options.every, video=options.video)
     try:
-        for frame in source.iter_frames(start, stop, options.every):
-            obs = _observation(frame.t_s, frame.image_bgr, log_data, options.speed_mps)
-            cmd = guard.step(obs)
-            extra: dict[str, Any] = {}
-            if "user/angle" in frame.record:
-                extra["recorded_angle"] = frame.record.get("user/angle")
-                extra["recorded_throttle"] = frame.record.get("user/throttle")
-            log.write(command_record(frame.index, frame.t_s, cmd, **extra))
-            if video is not None:
-                analysis = cmd.perceived.analysis if cmd.perceived is not None else None
-                video.write(annotate(frame.image_bgr, cmd, analysis, f"t {frame.t_s:.1f} s"))
-            done += 1
-            if on_frame is not None:
-                on_frame(done, expected)
+        with recorder:
+            for frame in frames:
+                obs = _observation(frame.t_s, frame.image_bgr, log_data, options.speed_mps)
+                cmd = guard.step(obs)
+                analysis = None
+                if recorder.video_path is not None:
+                    analysis = cmd.perceived.analysis if cmd.perceived is not None else None
+                recorder.frame(frame.index, frame.t_s, cmd, image=frame.image_bgr, analysis=analysis, caption=f"t {frame.t_s:.1f} s",
+                               fields=frame.log_fields)
+                if on_frame is not None:
+                    on_frame(recorder.frames, expected)
+                if stop:
+                    break
     except KeyboardInterrupt:
         interrupted = True
-    finally:
-        log.close()
-        if video is not None:
-            video.close()
+    interrupted = interrupted or bool(stop)
     elapsed = time.perf_counter() - began
-    records = read_jsonl(out / "log.jsonl")
-    summary = summarize(records)
+    done = recorder.frames
+    stats = recorder.stats
+    summary = stats.to_json()
     summary.update(
         source=str(source_path), kind=source.kind, fps=source.fps, expected_frames=source.expected_frames,
         processed_frames=done, processing_fps=done / elapsed if elapsed > 0 else None, interrupted=interrupted,
@@ -105,11 +112,19 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
         source_notes=list(source.notes), vehicle={"has_ultrasonic": has_us, "has_qr_localisation": options.qr_localisation},
         sensor_log_issues=[{"line": i.line, "problem": i.problem} for i in log_data.issues] if log_data else [],
     )
+    if stop:
+        summary["stopped_by"] = stop.name
+    if recorder.video_path is not None:
+        summary["video"] = {"path": str(recorder.video_path), "frames": done, "rescaled_frames": recorder.video_frames_rescaled}
     summary = json_value(summary)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False) + "\n", encoding="utf-8")
-    if options.plots and records:
-        plot_timeline(records, out / "timeline.png", title=f"fearguard replay: {Path(source_path).name}")
-    return ReplayResult(summary, out, interrupted)
+    recorder.write_summary(summary)
+    if options.plots and not stop:
+        recorder.plot_timeline(title=f"fearguard replay: {Path(source_path).name}")
+    if stop and not interrupted:  # every frame was replayed; the signal came while the files were written
+        interrupted = True
+        summary.update(interrupted=True, stopped_by=stop.name)
+        recorder.write_summary(summary)
+    return ReplayResult(summary, out, interrupted, stats, recorder.video_path, stop.name if stop else None)
 
 
 def _expected(total: int | None, start: int, stop: int | None, every: int) -> int | None:

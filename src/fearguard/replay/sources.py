@@ -19,7 +19,7 @@ import re
 import statistics
 from abc import ABC, abstractmethod
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import pairwise
 from pathlib import Path
 from types import MappingProxyType
@@ -51,6 +51,7 @@ class Frame:
     t_s: float
     image_bgr: np.ndarray  # uint8, H×W×3
     record: Mapping[str, Any]  # e.g. a tub's user/angle, user/throttle; an image folder's file name
+    log_fields: Mapping[str, Any] = field(default_factory=lambda: _EMPTY_RECORD)  # added to the replay log (a tub: recorded angle)
 
 
 @dataclass(frozen=True)
@@ -305,8 +306,10 @@ class TubSource(FrameSource):
                 stamp = _timestamp_ms(record)
                 if stamp is not None:
                     stamps.append(stamp)
-                if size is None and isinstance(record.get(self.image_key), str):
-                    image, _ = _read_image(self._image_path(record[self.image_key]))
+                name = record.get(self.image_key)
+                where = self._image_path(name) if size is None and isinstance(name, str) else None
+                if where is not None:
+                    image, _ = _read_image(where)
                     size = None if image is None else (int(image.shape[1]), int(image.shape[0]))
             if len(stamps) >= FPS_ESTIMATE_RECORDS:
                 break
@@ -321,7 +324,11 @@ class TubSource(FrameSource):
             notes.append(f"no usable _timestamp_ms to estimate the frame rate: --from/--to in seconds assume {DEFAULT_FPS:g} Hz")
         super().__init__(path, fps, expected, size, notes)
 
-    def _image_path(self, name: str) -> Path:
+    def _image_path(self, name: str) -> Path | None:
+        """The image a record names, inside the tub; None for a name that points outside it (absolute, ``..``)."""
+        parts = Path(name.replace("\\", "/")).parts
+        if not parts or Path(name).is_absolute() or name.startswith(("/", "\\")) or ".." in parts or ":" in parts[0]:
+            return None
         inside = self.images_dir / name
         if not os.path.exists(inside) and "/" in name:  # e.g. "images/0_cam_image_array_.jpg"; False for a too-long name
             return self.path / name
@@ -365,12 +372,23 @@ class TubSource(FrameSource):
                 self._skip(index, f"{catalog} line {number}: no image file name under {self.image_key!r}")
                 continue
             image_path = self._image_path(name)
+            if image_path is None:
+                self._skip(index, f"{catalog} line {number}: image name {name!r} points outside the tub (absolute or '..'); "
+                                  "record skipped")
+                continue
             image, why = _read_image(image_path)
             if image is None:
                 self._skip(index, f"{image_path.relative_to(self.path)} {why} ({catalog} line {number})")
                 continue
             extra = MappingProxyType({k: v for k, v in record.items() if k not in self.image_keys})
-            yield Frame(index, (stamp - self.t0_ms) / 1000.0, image, extra)
+            yield Frame(index, (stamp - self.t0_ms) / 1000.0, image, extra, _tub_log_fields(record))
+
+
+def _tub_log_fields(record: Mapping[str, Any]) -> Mapping[str, Any]:
+    """What a tub record adds to the replay log: the driver's recorded angle and throttle (when it has them)."""
+    if "user/angle" not in record:
+        return _EMPTY_RECORD
+    return MappingProxyType({"recorded_angle": record.get("user/angle"), "recorded_throttle": record.get("user/throttle")})
 
 
 def _timestamp_ms(record: Mapping[str, Any]) -> float | None:

@@ -4,14 +4,15 @@ Every frame: the world is sensed (camera frame, ultrasonic, odometer, speed); th
 (default ``HoughLaneSteering`` on the rendered frame, with the scenario's estimator fault applied)
 proposes an angle; ``FearGuard`` (or a baseline) decides; the car follows min(cruise, limit) within
 its limits. No cue shortcuts: the cues come from pixels and readings. Same scenario and seed →
-identical log, byte for byte (nothing reads the wall clock into the log).
+identical log, byte for byte (nothing reads the wall clock into the log). What a run leaves behind
+(log, video, trace for the plots) goes through ``recorder.Recorder``, as for every driver.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -20,11 +21,11 @@ import numpy as np
 from fearguard.camera import CameraModel
 from fearguard.errors import EstimatorFault
 from fearguard.fuzzy.loader import load_rules
+from fearguard.interrupt import StopSignal
 from fearguard.observation import Observation
-from fearguard.overlay import VideoOut, annotate
-from fearguard.report import JsonlLog, command_record
+from fearguard.recorder import Recorder, Trace
 from fearguard.sim.baselines import BASELINES, Baseline
-from fearguard.sim.metrics import Metrics, check_expectations
+from fearguard.sim.metrics import ExpectationResult, Metrics, Row, RunMetrics, check_expectations
 from fearguard.sim.scenario_values import Scenario, SteeringFault
 from fearguard.sim.world import World
 from fearguard.supervisor import Command, FearGuard
@@ -59,26 +60,48 @@ class FaultyEstimator(HoughLaneSteering):
 
 @dataclass(frozen=True)
 class RunResult:
-    """A finished run: its summary (metrics), the expectations checked, and where the files are."""
+    """A finished (or interrupted) run: its metrics, the expectations checked, and what the plots need."""
 
     scenario: str
     controller: str
     seed: int
-    summary: dict[str, Any]
-    expectations: list[dict[str, Any]]
+    metrics: RunMetrics
+    expectations: tuple[ExpectationResult, ...]
     frames: int
     interrupted: bool = False
+    stopped_by: str | None = None  # the signal that interrupted the run (None: Ctrl-C as KeyboardInterrupt, or none)
+    rows: tuple[Row, ...] = field(default=(), repr=False)  # per-frame truth and decisions (trajectory plot)
+    trace: Trace | None = field(default=None, repr=False, compare=False)  # per-frame cues and decisions (timeline plot)
+    video_path: Path | None = None
 
     @property
     def passed(self) -> bool:
-        return all(e["ok"] for e in self.expectations)
+        """Every expectation holds, over a run that was not cut short (an interrupted run never passes)."""
+        return not self.interrupted and all(e.ok for e in self.expectations)
+
+    @property
+    def summary(self) -> dict[str, Any]:
+        """The metrics as JSON values (summary.json's metric keys)."""
+        return self.metrics.to_json()
+
+    def to_json(self) -> dict[str, Any]:
+        """summary.json: who ran what, the verdict, each expectation, then the metrics."""
+        head: dict[str, Any] = {"scenario": self.scenario, "controller": self.controller, "seed": self.seed, "frames": self.frames,
+                                "interrupted": self.interrupted}
+        if self.stopped_by is not None:
+            head["stopped_by"] = self.stopped_by
+        return {**head, "passed": self.passed, "expectations": [asdict(e) for e in self.expectations], **self.metrics.to_json()}
 
 
 def run_scenario(
-    scenario: Scenario, seed: int | None = None, controller: str = "guarded", log_path: Path | None = None,
-    video_path: Path | None = None, on_frame: Callable[[int, int], None] | None = None,
+    scenario: Scenario, seed: int | None = None, controller: str = "guarded", out_dir: Path | None = None, *, video: bool = False,
+    on_frame: Callable[[int, int], None] | None = None, stop: StopSignal | None = None, video_kind: str | None = None,
 ) -> RunResult:
-    """Run one scenario closed loop; write the JSON Lines log (flushed per frame) and the video if asked."""
+    """Run one scenario closed loop; with ``out_dir``, record log.jsonl (flushed per frame) and, if asked, the video.
+
+    ``stop`` (from ``interrupt.stop_on_signals``) ends the run after the current frame; so does a
+    KeyboardInterrupt. Either way the result says ``interrupted`` and keeps every frame recorded.
+    """
     if controller not in CONTROLLERS:
         raise ValueError(f"unknown controller {controller!r}; choose one of {', '.join(CONTROLLERS)}")
     seed = scenario.seed if seed is None else seed
@@ -94,59 +117,52 @@ def run_scenario(
     if controller != "guarded":
         baseline = Baseline(controller, profile.cruise_speed_mps, limits.ultrasonic_min_range_m, limits.ultrasonic_max_range_m)
     metrics = Metrics()
-    timeline: list[dict[str, Any]] = []
     total = math.ceil(scenario.duration_s / world.dt_s)
-    log = JsonlLog(log_path) if log_path is not None else None
-    video = VideoOut(str(video_path), scenario.camera.fps) if video_path is not None else None
+    recorder = Recorder(out_dir, fps=scenario.camera.fps, video=video, video_kind=video_kind)
     frame_index, interrupted, last_steer = 0, False, 0.0
     try:
-        while True:
-            sens = world.sense()
-            estimator.t_s = sens.t_s
-            cmd: Command | None = None
-            analysis: FrameAnalysis | None = None
-            if baseline is None:
-                obs = Observation(t_s=sens.t_s, speed_mps=sens.speed_mps, frame=sens.frame_bgr,
-                                  ultrasonic_range_m=sens.ultrasonic_range_m, odometer_m=sens.odometer_m)
-                cmd = guard.step(obs)
-                steering, target = cmd.steering_deg, min(profile.cruise_speed_mps, cmd.speed_limit_mps)
-                analysis = cmd.perceived.analysis if cmd.perceived is not None else None
-            else:
-                steering, analysis = _unsupervised_steering(estimator, sens.frame_bgr, last_steer, profile.max_steering_deg)
-                target = baseline.speed_target(sens.t_s, sens.ultrasonic_range_m)
-            last_steer = steering
-            world.advance(steering, target)
-            truth = world.truth()
-            mode = cmd.mode.name if cmd is not None else None
-            strategy = cmd.strategy.name if cmd is not None else None
-            limit = cmd.speed_limit_mps if cmd is not None else None
-            metrics.add(truth, mode, strategy, limit, cmd.fear if cmd is not None else None)
-            timeline.append({"t_s": truth.t_s, "mode": mode, "strategy": strategy, "speed_mps": truth.speed_mps, "s_m": truth.s_m})
-            if log is not None:
-                log.write(command_record(
-                    frame_index, sens.t_s, cmd, controller=controller, speed_target_mps=target, applied_steering_deg=steering,
-                    speed_mps=truth.speed_mps, s_m=truth.s_m, lateral_m=truth.lateral_m, x_m=truth.x_m, y_m=truth.y_m,
-                    gap_m=truth.gap_m, ttc_s=truth.ttc_s, collided=truth.collided, in_lane=truth.in_lane,
-                    ultrasonic_raw_m=sens.ultrasonic_range_m,
-                ))
-            if video is not None:
-                video.write(annotate(sens.frame_bgr, cmd, analysis, f"v {truth.speed_mps:.2f} m/s"))
-            frame_index += 1
-            if on_frame is not None:
-                on_frame(frame_index, total)
-            if truth.collided or truth.finished:
-                break
+        with recorder:
+            while not stop:
+                sens = world.sense()
+                estimator.t_s = sens.t_s
+                cmd: Command | None = None
+                analysis: FrameAnalysis | None = None
+                if baseline is None:
+                    obs = Observation(t_s=sens.t_s, speed_mps=sens.speed_mps, frame=sens.frame_bgr,
+                                      ultrasonic_range_m=sens.ultrasonic_range_m, odometer_m=sens.odometer_m)
+                    cmd = guard.step(obs)
+                    steering, target = cmd.steering_deg, min(profile.cruise_speed_mps, cmd.speed_limit_mps)
+                    analysis = cmd.perceived.analysis if cmd.perceived is not None else None
+                else:
+                    steering, analysis = _unsupervised_steering(estimator, sens.frame_bgr, last_steer, profile.max_steering_deg)
+                    target = baseline.speed_target(sens.t_s, sens.ultrasonic_range_m)
+                last_steer = steering
+                world.advance(steering, target)
+                truth = world.truth()
+                if cmd is None:
+                    metrics.add(truth)
+                else:
+                    metrics.add(truth, cmd.mode, cmd.strategy, cmd.speed_limit_mps, cmd.fear)
+                recorder.frame(
+                    frame_index, sens.t_s, cmd, image=sens.frame_bgr, analysis=analysis, caption=f"v {truth.speed_mps:.2f} m/s",
+                    speed_mps=truth.speed_mps, fields={
+                        "controller": controller, "speed_target_mps": target, "applied_steering_deg": steering,
+                        "speed_mps": truth.speed_mps, "s_m": truth.s_m, "lateral_m": truth.lateral_m, "x_m": truth.x_m, "y_m": truth.y_m,
+                        "gap_m": truth.gap_m, "ttc_s": truth.ttc_s, "collided": truth.collided, "in_lane": truth.in_lane,
+                        "ultrasonic_raw_m": sens.ultrasonic_range_m,
+                    })
+                frame_index += 1
+                if on_frame is not None:
+                    on_frame(frame_index, total)
+                if truth.collided or truth.finished:
+                    break
     except KeyboardInterrupt:
         interrupted = True
-    finally:
-        if log is not None:
-            log.close()
-        if video is not None:
-            video.close()
-    summary = metrics.summary()
-    results = check_expectations(scenario.expectations, summary, timeline)
-    expectations = [{"name": r.name, "ok": bool(r.ok), "detail": r.detail} for r in results]
-    return RunResult(scenario.name, controller, seed, summary, expectations, frame_index, interrupted)
+    interrupted = interrupted or bool(stop)
+    run = metrics.result()
+    results = tuple(check_expectations(scenario.expectations, run, metrics.rows))
+    return RunResult(scenario.name, controller, seed, run, results, frame_index, interrupted, stop.name if stop else None,
+                     tuple(metrics.rows), recorder.trace, recorder.video_path)
 
 
 def _unsupervised_steering(

@@ -1,16 +1,19 @@
-"""Run metrics (one row per frame → a JSON-ready summary) and the scenario's expectations checked against them.
+"""Run metrics (one row per frame → a typed summary) and the scenario's expectations checked against them.
 
 Each frame's row holds the truth and, for a guarded run, the supervisor's mode, strategy, speed limit
 and fear (None for an unguarded run). A frame stands for the time until the next frame (the last one
 for the median frame interval). Events are counted on rising edges: a collision that lasts 30 frames
 is one collision; leaving the lane twice is two departures. Infinite values (no object ahead, not
-closing) become None in the summary, so it serialises as plain JSON.
+closing) become None in the summary, so it serialises as plain JSON (``RunMetrics.to_json``).
+
+Expectations are a table: one checker per expectation name, run in ``EXPECTATION_NAMES`` order for the
+expectations a scenario sets; threshold expectations are rows of (metric, at least / at most, unit).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass
 from itertools import pairwise
 from typing import Any
@@ -18,12 +21,15 @@ from typing import Any
 import numpy as np
 
 from fearguard.readings import finite_reading
-from fearguard.sim.scenario_values import Expectations
+from fearguard.sim.scenario_values import EXPECTATION_NAMES, Expectations
 from fearguard.sim.world import Truth
 
 MODES = ("NORMAL", "CAUTION", "EMERGENCY")
 STOPPED_SPEED_MPS = 0.02  # [m/s] at or below this the car counts as stopped
 SPEED_TOLERANCE_MPS = 1e-6  # [m/s] a speed cap is met up to floating-point rounding
+TIME_TOLERANCE_S = 1e-9  # [s] "by t" / "not before t" compare times up to rounding
+NEEDS_SUPERVISOR = "no supervisor mode recorded (unguarded run): this expectation needs a guarded run"
+NO_FALSE_ALARM = "no supervisor (unguarded run): no mode, so no false alarm"
 
 
 @dataclass(frozen=True)
@@ -49,6 +55,70 @@ class Row:
 
 
 @dataclass(frozen=True)
+class Stop:
+    """The car came to a stop (rising edge of speed ≤ STOPPED_SPEED_MPS); gap None: nothing ahead."""
+
+    t_s: float
+    s_m: float
+    gap_m: float | None
+
+
+@dataclass(frozen=True)
+class RunMetrics:
+    """The numbers of one run (see docs/scenarios.md, "Metrics"); the fields after ``stops`` are None for no frames."""
+
+    frames: int
+    duration_s: float
+    distance_m: float
+    guarded: bool
+    collisions: int
+    lane_departures: int
+    time_outside_lane_s: float
+    emergency_entries: int
+    mode_switches: int
+    time_in_mode_s: Mapping[str, float]
+    stops: tuple[Stop, ...]
+    mean_speed_mps: float | None = None
+    max_speed_mps: float | None = None
+    final_speed_mps: float | None = None
+    final_s_m: float | None = None
+    final_gap_m: float | None = None
+    finished: bool | None = None
+    first_collision_t_s: float | None = None
+    max_abs_lateral_m: float | None = None
+    min_gap_m: float | None = None
+    min_ttc_s: float | None = None
+    peak_lat_accel_mps2: float | None = None
+    time_in_strategy_s: Mapping[str, float] | None = None
+    first_mode_t_s: Mapping[str, float | None] | None = None
+    first_strategy_t_s: Mapping[str, float] | None = None
+    min_speed_limit_mps: float | None = None
+    mean_fear: float | None = None
+    max_fear: float | None = None
+
+    def to_json(self) -> dict[str, Any]:
+        """The summary.json keys (a run without frames has only the counts)."""
+        stops = [asdict(s) for s in self.stops]
+        if self.frames == 0:
+            return {"frames": 0, "duration_s": self.duration_s, "distance_m": self.distance_m, "guarded": self.guarded,
+                    "collisions": self.collisions, "lane_departures": self.lane_departures,
+                    "time_outside_lane_s": self.time_outside_lane_s, "emergency_entries": self.emergency_entries,
+                    "mode_switches": self.mode_switches, "time_in_mode_s": dict(self.time_in_mode_s), "stops": stops}
+        return {
+            "frames": self.frames, "duration_s": self.duration_s, "distance_m": self.distance_m, "mean_speed_mps": self.mean_speed_mps,
+            "max_speed_mps": self.max_speed_mps, "final_speed_mps": self.final_speed_mps, "final_s_m": self.final_s_m,
+            "final_gap_m": self.final_gap_m, "finished": self.finished, "guarded": self.guarded, "collisions": self.collisions,
+            "first_collision_t_s": self.first_collision_t_s, "lane_departures": self.lane_departures,
+            "time_outside_lane_s": self.time_outside_lane_s, "max_abs_lateral_m": self.max_abs_lateral_m,
+            "min_gap_m": self.min_gap_m, "min_ttc_s": self.min_ttc_s, "peak_lat_accel_mps2": self.peak_lat_accel_mps2,
+            "time_in_mode_s": dict(self.time_in_mode_s), "time_in_strategy_s": dict(self.time_in_strategy_s or {}),
+            "first_mode_t_s": dict(self.first_mode_t_s or {}), "first_strategy_t_s": dict(self.first_strategy_t_s or {}),
+            "emergency_entries": self.emergency_entries, "mode_switches": self.mode_switches, "stops": stops,
+            "min_speed_limit_mps": self.min_speed_limit_mps, "mean_fear": self.mean_fear, "max_fear": self.max_fear,
+        }
+
+
+@dataclass(frozen=True)
 class ExpectationResult:
     name: str
     ok: bool
@@ -56,7 +126,7 @@ class ExpectationResult:
 
 
 class Metrics:
-    """Accumulates one Row per frame; ``summary()`` turns them into numbers."""
+    """Accumulates one Row per frame; ``result()`` turns them into RunMetrics."""
 
     def __init__(self) -> None:
         self.rows: list[Row] = []
@@ -68,167 +138,195 @@ class Metrics:
                              truth.collided, truth.in_lane, truth.lat_accel_mps2, truth.finished, _name(mode), _name(strategy),
                              finite_reading(speed_limit_mps), finite_reading(fear)))
 
-    @property
-    def timeline(self) -> list[dict[str, Any]]:
-        """The rows as dicts (what ``check_expectations`` reads: t_s, mode, strategy, speed_mps, s_m, ...)."""
-        return [asdict(r) for r in self.rows]
-
-    def summary(self) -> dict[str, Any]:
-        """JSON-ready numbers of the run (see docs/scenarios.md, "Metrics")."""
+    def result(self) -> RunMetrics:
+        """The typed numbers of the run so far."""
         return summarize(self.rows)
 
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready numbers of the run (``result().to_json()``)."""
+        return self.result().to_json()
 
-def summarize(rows: Sequence[Row]) -> dict[str, Any]:
-    """The summary of a list of rows (a pure function of them)."""
+
+def summarize(rows: Sequence[Row]) -> RunMetrics:
+    """The metrics of a list of rows (a pure function of them)."""
     if not rows:
-        return {"frames": 0, "duration_s": 0.0, "distance_m": 0.0, "guarded": False, "collisions": 0, "lane_departures": 0,
-                "time_outside_lane_s": 0.0, "emergency_entries": 0, "mode_switches": 0,
-                "time_in_mode_s": dict.fromkeys(MODES, 0.0), "stops": []}
+        return RunMetrics(0, 0.0, 0.0, False, 0, 0, 0.0, 0, 0, dict.fromkeys(MODES, 0.0), ())
     t = np.array([r.t_s for r in rows])
     dt = _frame_durations(t)
     speed = np.array([r.speed_mps for r in rows])
     x, y = np.array([r.x_m for r in rows]), np.array([r.y_m for r in rows])
-    collided = np.array([r.collided for r in rows])
     outside = ~np.array([r.in_lane for r in rows])
-    gaps = np.array([r.gap_m for r in rows])
-    ttcs = np.array([r.ttc_s for r in rows])
     modes = [r.mode for r in rows]
-    strategies = [r.strategy for r in rows]
-    guarded = any(m is not None for m in modes)
     duration = float(dt.sum())
-    stopped = speed <= STOPPED_SPEED_MPS
-    stops = [{"t_s": rows[i].t_s, "s_m": rows[i].s_m, "gap_m": _json(rows[i].gap_m)} for i in np.flatnonzero(_rising(stopped))]
+    return RunMetrics(
+        frames=len(rows), duration_s=duration, distance_m=float(np.hypot(np.diff(x), np.diff(y)).sum()),
+        guarded=any(m is not None for m in modes), collisions=int(_rising(np.array([r.collided for r in rows])).sum()),
+        lane_departures=int(_rising(outside).sum()), time_outside_lane_s=float(dt[outside].sum()),
+        emergency_entries=int(_rising(np.array([m == "EMERGENCY" for m in modes])).sum()),
+        mode_switches=sum(1 for a, b in pairwise(modes) if a is not None and b is not None and a != b),
+        time_in_mode_s={m: float(dt[[k == m for k in modes]].sum()) for m in MODES},
+        stops=tuple(Stop(rows[i].t_s, rows[i].s_m, _json(rows[i].gap_m)) for i in np.flatnonzero(_rising(speed <= STOPPED_SPEED_MPS))),
+        mean_speed_mps=float((speed * dt).sum() / duration) if duration > 0 else float(speed.mean()),
+        max_speed_mps=float(speed.max()), final_speed_mps=float(speed[-1]), final_s_m=rows[-1].s_m,
+        final_gap_m=_json(rows[-1].gap_m), finished=rows[-1].finished,
+        first_collision_t_s=next((r.t_s for r in rows if r.collided), None),
+        max_abs_lateral_m=float(np.abs([r.lateral_m for r in rows]).max()),
+        min_gap_m=_json(float(np.min([r.gap_m for r in rows]))), min_ttc_s=_json(float(np.min([r.ttc_s for r in rows]))),
+        peak_lat_accel_mps2=float(np.abs([r.lat_accel_mps2 for r in rows]).max()),
+        **_supervisor_metrics(rows, dt),
+    )
+
+
+def _supervisor_metrics(rows: Sequence[Row], dt: np.ndarray) -> dict[str, Any]:
+    """Strategy times, first times per mode and strategy, the lowest limit, mean and peak fear."""
+    strategies = [r.strategy for r in rows]
+    used = sorted({k for k in strategies if k})
     fears = [r.fear for r in rows if r.fear is not None]
-    first_collision = next((r.t_s for r in rows if r.collided), None)
     return {
-        "frames": len(rows),
-        "duration_s": duration,
-        "distance_m": float(np.hypot(np.diff(x), np.diff(y)).sum()),
-        "mean_speed_mps": float((speed * dt).sum() / duration) if duration > 0 else float(speed.mean()),
-        "max_speed_mps": float(speed.max()),
-        "final_speed_mps": float(speed[-1]),
-        "final_s_m": rows[-1].s_m,
-        "final_gap_m": _json(rows[-1].gap_m),
-        "finished": rows[-1].finished,
-        "guarded": guarded,
-        "collisions": int(_rising(collided).sum()),
-        "first_collision_t_s": first_collision,
-        "lane_departures": int(_rising(outside).sum()),
-        "time_outside_lane_s": float(dt[outside].sum()),
-        "max_abs_lateral_m": float(np.abs([r.lateral_m for r in rows]).max()),
-        "min_gap_m": _json(float(gaps.min())),
-        "min_ttc_s": _json(float(ttcs.min())),
-        "peak_lat_accel_mps2": float(np.abs([r.lat_accel_mps2 for r in rows]).max()),
-        "time_in_mode_s": {m: float(dt[[k == m for k in modes]].sum()) for m in MODES},
-        "time_in_strategy_s": {s: float(dt[[k == s for k in strategies]].sum()) for s in sorted({k for k in strategies if k})},
+        "time_in_strategy_s": {s: float(dt[[k == s for k in strategies]].sum()) for s in used},
         "first_mode_t_s": {m: next((r.t_s for r in rows if r.mode == m), None) for m in MODES},
-        "first_strategy_t_s": {s: next(r.t_s for r in rows if r.strategy == s) for s in sorted({k for k in strategies if k})},
-        "emergency_entries": int(_rising(np.array([m == "EMERGENCY" for m in modes])).sum()),
-        "mode_switches": sum(1 for a, b in pairwise(modes) if a is not None and b is not None and a != b),
-        "stops": stops,
+        "first_strategy_t_s": {s: next(r.t_s for r in rows if r.strategy == s) for s in used},
         "min_speed_limit_mps": min((r.speed_limit_mps for r in rows if r.speed_limit_mps is not None), default=None),
         "mean_fear": float(np.mean(fears)) if fears else None,
         "max_fear": float(np.max(fears)) if fears else None,
     }
 
 
-def check_expectations(expectations: Expectations, summary: Mapping[str, Any], timeline: Sequence[Any]) -> list[ExpectationResult]:
-    """Every expectation the scenario sets, checked against the run (timeline rows: dicts or objects with t_s, mode, ...)."""
-    rows = [_row_view(r) for r in timeline]
-    guarded = any(r["mode"] is not None for r in rows)
-    e = expectations
-    out: list[ExpectationResult] = []
+# -- expectations --------------------------------------------------------------------------------
+Check = Callable[[Any, RunMetrics, Sequence[Row]], list[ExpectationResult]]
 
-    def add(name: str, ok: bool, detail: str) -> None:
-        out.append(ExpectationResult(name, bool(ok), detail))
 
-    def unguarded(name: str) -> bool:
-        if not guarded:
-            add(name, False, "no supervisor mode recorded (unguarded run): this expectation needs a guarded run")
-        return not guarded
+def _threshold(name: str, metric: str, at_least: bool, what: str, none: str | None = None) -> Check:
+    """An expectation "metric ≥ want" (or ≤); ``none``: the verdict text when the metric is absent and that is fine."""
 
-    def no_false_alarm_possible(name: str) -> bool:
-        """False-alarm limits hold vacuously for a car without a supervisor: it has no modes to switch."""
-        if not guarded:
-            add(name, True, "no supervisor (unguarded run): no mode, so no false alarm")
-        return not guarded
+    def check(want: float, run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
+        got = getattr(run, metric)
+        if got is None:
+            return [ExpectationResult(name, none is not None, none or f"not measured ({what})")]
+        ok = got >= want if at_least else got <= want
+        return [ExpectationResult(name, bool(ok), f"{got:.3g} {what}, at {'least' if at_least else 'most'} {want:g} expected")]
 
-    collisions = int(summary.get("collisions", 0))
-    if e.no_collision is not None:
-        when = f" (first at {summary.get('first_collision_t_s')} s)" if collisions else ""
-        add("no_collision", (collisions == 0) == e.no_collision, f"{collisions} collision(s){when}")
-    if e.no_lane_departure is not None:
-        n = int(summary.get("lane_departures", 0))
-        add("no_lane_departure", (n == 0) == e.no_lane_departure,
-            f"{n} lane departure(s), {summary.get('time_outside_lane_s', 0.0):.2f} s outside the lane")
-    _at_most(add, "max_time_outside_lane_s", e.max_time_outside_lane_s, summary.get("time_outside_lane_s"), "s outside the lane")
-    _at_least(add, "min_mean_speed_mps", e.min_mean_speed_mps, summary.get("mean_speed_mps"), "m/s mean speed")
-    _at_most(add, "max_mean_speed_mps", e.max_mean_speed_mps, summary.get("mean_speed_mps"), "m/s mean speed")
-    _at_least(add, "min_distance_m", e.min_distance_m, summary.get("distance_m"), "m driven")
-    _at_most(add, "max_distance_m", e.max_distance_m, summary.get("distance_m"), "m driven")
-    if e.no_emergency is not None and not no_false_alarm_possible("no_emergency"):
-        t_em = summary.get("time_in_mode_s", {}).get("EMERGENCY", 0.0)
-        add("no_emergency", (t_em == 0.0) == e.no_emergency,
-            f"{summary.get('emergency_entries', 0)} EMERGENCY entr(ies), {t_em:.2f} s in EMERGENCY")
-    if e.max_emergency_entries is not None and not no_false_alarm_possible("max_emergency_entries"):
-        n = int(summary.get("emergency_entries", 0))
-        add("max_emergency_entries", n <= e.max_emergency_entries, f"{n} EMERGENCY entr(ies), at most {e.max_emergency_entries} allowed")
-    if e.max_mode_switches is not None and not no_false_alarm_possible("max_mode_switches"):
-        n = int(summary.get("mode_switches", 0))
-        add("max_mode_switches", n <= e.max_mode_switches, f"{n} mode switch(es), at most {e.max_mode_switches} allowed")
-    if e.stopped_before_obstacle is not None:
-        stops = [s for s in summary.get("stops", []) if s.get("gap_m") is not None]
-        ok = bool(stops) and collisions == 0
-        detail = (f"stopped {stops[0]['gap_m']:.2f} m before it at {stops[0]['t_s']:.2f} s" if stops else
-                  "never stopped with an object ahead in the lane")
-        add("stopped_before_obstacle", ok == e.stopped_before_obstacle, detail + (f"; {collisions} collision(s)" if collisions else ""))
-    _at_least(add, "min_gap_m", e.min_gap_m, summary.get("min_gap_m"), "m smallest gap", none="no object ahead at any time")
-    _at_least(add, "min_ttc_s", e.min_ttc_s, summary.get("min_ttc_s"), "s smallest time to collision", none="never closing in")
-    _at_most(add, "max_lat_accel_mps2", e.max_lat_accel_mps2, summary.get("peak_lat_accel_mps2"), "m/s² peak lateral acceleration")
-    by = [("mode", w.mode, w.t_s) for w in e.mode_by] + [("strategy", w.strategy, w.t_s) for w in e.strategy_by]
-    for field, value, t_s in by:  # "reach this mode / strategy by t_s"
-        name = f"{field}_by {value} by {t_s:g} s"
-        if not unguarded(name):
-            first = next((r["t_s"] for r in rows if r[field] == value), None)
+    return check
+
+
+def _supervised(name: str, check: Callable[[Any, RunMetrics], tuple[bool, str]]) -> Check:
+    """A false-alarm limit: it holds vacuously for a car without a supervisor (no modes to switch)."""
+
+    def run_check(want: Any, run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
+        if not _guarded(rows):
+            return [ExpectationResult(name, True, NO_FALSE_ALARM)]
+        ok, detail = check(want, run)
+        return [ExpectationResult(name, bool(ok), detail)]
+
+    return run_check
+
+
+def _no_collision(want: bool, run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
+    when = f" (first at {run.first_collision_t_s} s)" if run.collisions else ""
+    return [ExpectationResult("no_collision", (run.collisions == 0) == want, f"{run.collisions} collision(s){when}")]
+
+
+def _no_lane_departure(want: bool, run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
+    n = run.lane_departures
+    return [ExpectationResult("no_lane_departure", (n == 0) == want,
+                              f"{n} lane departure(s), {run.time_outside_lane_s:.2f} s outside the lane")]
+
+
+def _no_emergency(want: bool, run: RunMetrics) -> tuple[bool, str]:
+    t_em = run.time_in_mode_s.get("EMERGENCY", 0.0)
+    return (t_em == 0.0) == want, f"{run.emergency_entries} EMERGENCY entr(ies), {t_em:.2f} s in EMERGENCY"
+
+
+def _stopped_before_obstacle(want: bool, run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
+    stops = [s for s in run.stops if s.gap_m is not None]
+    ok = bool(stops) and run.collisions == 0
+    first = stops[0] if stops else None
+    detail = f"stopped {first.gap_m:.2f} m before it at {first.t_s:.2f} s" if first else "never stopped with an object ahead in the lane"
+    return [ExpectationResult("stopped_before_obstacle", ok == want,
+                              detail + (f"; {run.collisions} collision(s)" if run.collisions else ""))]
+
+
+def _reached_by(field: str) -> Check:
+    """"Reach this mode / strategy by t_s": one result per entry."""
+
+    def check(wants: Sequence[Any], run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
+        out = []
+        for want in wants:
+            value = getattr(want, field)
+            name = f"{field}_by {value} by {want.t_s:g} s"
+            if not _guarded(rows):
+                out.append(ExpectationResult(name, False, NEEDS_SUPERVISOR))
+                continue
+            first = next((r.t_s for r in rows if getattr(r, field) == value), None)
             detail = f"first {value} at {first:.2f} s" if first is not None else f"never {value}"
-            add(name, first is not None and first <= t_s + 1e-9, detail)
-    for want in e.mode_not_before:
+            out.append(ExpectationResult(name, first is not None and first <= want.t_s + TIME_TOLERANCE_S, detail))
+        return out
+
+    return check
+
+
+def _mode_not_before(wants: Sequence[Any], run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
+    out = []
+    for want in wants:
         name = f"mode_not_before {want.mode} before {want.t_s:g} s"
-        if not unguarded(name):
-            early = next((r["t_s"] for r in rows if r["mode"] == want.mode and r["t_s"] < want.t_s - 1e-9), None)
-            add(name, early is None,
-                f"{want.mode} already at {early:.2f} s" if early is not None else f"no {want.mode} before {want.t_s:g} s")
-    for cap in e.max_speed_between:
+        if not _guarded(rows):
+            out.append(ExpectationResult(name, False, NEEDS_SUPERVISOR))
+            continue
+        early = next((r.t_s for r in rows if r.mode == want.mode and r.t_s < want.t_s - TIME_TOLERANCE_S), None)
+        out.append(ExpectationResult(name, early is None, f"{want.mode} already at {early:.2f} s" if early is not None
+                                     else f"no {want.mode} before {want.t_s:g} s"))
+    return out
+
+
+def _max_speed_between(caps: Sequence[Any], run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
+    out = []
+    for cap in caps:
         if cap.t_s is not None and cap.until_s is not None:
             lo, hi, key, unit = cap.t_s, cap.until_s, "t_s", "s"
         else:
             lo, hi, key, unit = cap.from_m, cap.to_m, "s_m", "m"
         name = f"max_speed_between {lo:g}-{hi:g} {unit}: {cap.max_speed_mps:g} m/s"
-        inside = [r["speed_mps"] for r in rows if lo <= r[key] < hi]  # type: ignore[operator]
+        inside = [r.speed_mps for r in rows if lo <= getattr(r, key) < hi]
         if not inside:
-            add(name, True, f"no frame in {lo:g}-{hi:g} {unit} (the car never got there)")
+            out.append(ExpectationResult(name, True, f"no frame in {lo:g}-{hi:g} {unit} (the car never got there)"))
         else:
             top = max(inside)
-            add(name, top <= cap.max_speed_mps + SPEED_TOLERANCE_MPS, f"fastest {top:.2f} m/s there")
+            out.append(ExpectationResult(name, top <= cap.max_speed_mps + SPEED_TOLERANCE_MPS, f"fastest {top:.2f} m/s there"))
     return out
 
 
-def _at_least(add: Any, name: str, want: float | None, got: float | None, what: str, none: str | None = None) -> None:
-    if want is None:
-        return
-    if got is None:
-        add(name, none is not None, none or f"not measured ({what})")
-    else:
-        add(name, got >= want, f"{got:.3g} {what}, at least {want:g} expected")
+CHECKS: dict[str, Check] = {  # one checker per expectation; run in EXPECTATION_NAMES order
+    "no_collision": _no_collision,
+    "no_lane_departure": _no_lane_departure,
+    "max_time_outside_lane_s": _threshold("max_time_outside_lane_s", "time_outside_lane_s", False, "s outside the lane"),
+    "min_mean_speed_mps": _threshold("min_mean_speed_mps", "mean_speed_mps", True, "m/s mean speed"),
+    "max_mean_speed_mps": _threshold("max_mean_speed_mps", "mean_speed_mps", False, "m/s mean speed"),
+    "min_distance_m": _threshold("min_distance_m", "distance_m", True, "m driven"),
+    "max_distance_m": _threshold("max_distance_m", "distance_m", False, "m driven"),
+    "no_emergency": _supervised("no_emergency", _no_emergency),
+    "max_emergency_entries": _supervised("max_emergency_entries", lambda want, run: (
+        run.emergency_entries <= want, f"{run.emergency_entries} EMERGENCY entr(ies), at most {want} allowed")),
+    "max_mode_switches": _supervised("max_mode_switches", lambda want, run: (
+        run.mode_switches <= want, f"{run.mode_switches} mode switch(es), at most {want} allowed")),
+    "stopped_before_obstacle": _stopped_before_obstacle,
+    "min_gap_m": _threshold("min_gap_m", "min_gap_m", True, "m smallest gap", none="no object ahead at any time"),
+    "min_ttc_s": _threshold("min_ttc_s", "min_ttc_s", True, "s smallest time to collision", none="never closing in"),
+    "max_lat_accel_mps2": _threshold("max_lat_accel_mps2", "peak_lat_accel_mps2", False, "m/s² peak lateral acceleration"),
+    "mode_by": _reached_by("mode"),
+    "strategy_by": _reached_by("strategy"),
+    "mode_not_before": _mode_not_before,
+    "max_speed_between": _max_speed_between,
+}
+assert tuple(CHECKS) == EXPECTATION_NAMES, "one checker per expectation, in the order they are checked"
 
 
-def _at_most(add: Any, name: str, want: float | None, got: float | None, what: str) -> None:
-    if want is None:
-        return
-    if got is None:
-        add(name, False, f"not measured ({what})")
-    else:
-        add(name, got <= want, f"{got:.3g} {what}, at most {want:g} expected")
+def check_expectations(expectations: Expectations, run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
+    """Every expectation the scenario sets, checked against the run's metrics and rows."""
+    return [result for name in expectations.names() for result in CHECKS[name](getattr(expectations, name), run, rows)]
+
+
+def _guarded(rows: Sequence[Row]) -> bool:
+    return any(r.mode is not None for r in rows)
 
 
 def _frame_durations(t: np.ndarray) -> np.ndarray:
@@ -252,14 +350,3 @@ def _name(value: object) -> str | None:
 
 def _json(value: float) -> float | None:
     return value if math.isfinite(value) else None
-
-
-def _row_view(row: Any) -> dict[str, Any]:
-    """A timeline row as a dict with t_s, mode, strategy, speed_mps, s_m (dicts and objects alike)."""
-    get = row.get if isinstance(row, Mapping) else (lambda k, d=None: getattr(row, k, d))
-    def num(key: str) -> float:
-        value = finite_reading(get(key))
-        return math.nan if value is None else value
-
-    return {"t_s": num("t_s"), "mode": _name(get("mode")), "strategy": _name(get("strategy")), "speed_mps": num("speed_mps"),
-            "s_m": num("s_m")}

@@ -15,7 +15,6 @@ flushed line per step), summary.json, timeline.png, drive.png, and annotated.mp4
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable
@@ -26,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from fearguard.fuzzy.loader import bundled_rules_path, load_rules
-from fearguard.overlay import VideoOut, annotate
-from fearguard.report import JsonlLog, command_record, json_value, plot_timeline, read_jsonl, summarize
+from fearguard.recorder import Recorder
+from fearguard.report import json_value, read_jsonl
 from fearguard.sim.loop import _unsupervised_steering
 from fearguard.supervisor import Command, FearGuard, Observation
 from fearguard.vision.lane_steering import HoughLaneSteering
@@ -90,44 +89,6 @@ class DriveResult:
     interrupted: bool
 
 
-class _Recorder:
-    """log.jsonl (flushed per step), annotated.mp4; at the end summary.json and the plots.
-
-    The same calls as the project's one recorder for every driver (frame / close / write_summary /
-    plot_timeline), so this small stand-in gives way to it without touching the loop.
-    """
-
-    def __init__(self, out_dir: Path | None, *, fps: float, video: bool = False) -> None:
-        self.out_dir = out_dir
-        self._log = JsonlLog(out_dir / "log.jsonl") if out_dir is not None else None
-        self._video = VideoOut(str(out_dir / "annotated.mp4"), fps) if out_dir is not None and video else None
-
-    def frame(self, frame: int, t_s: float, cmd: Command | None, *, image: np.ndarray | None = None, analysis: Any = None,
-              caption: str = "", speed_mps: float | None = None, fields: dict[str, Any] | None = None) -> None:
-        if self._video is not None and image is not None:
-            self._video.write(annotate(image, cmd, analysis, caption))
-        if self._log is not None:
-            self._log.write(command_record(frame, t_s, cmd, **(fields or {})))
-
-    def close(self) -> None:
-        if self._log is not None:
-            self._log.close()
-        if self._video is not None:
-            self._video.close()
-
-    def records(self) -> list[dict[str, Any]]:
-        return read_jsonl(self.out_dir / "log.jsonl") if self.out_dir is not None else []
-
-    def write_summary(self, summary: dict[str, Any]) -> None:
-        if self.out_dir is not None:
-            (self.out_dir / "summary.json").write_text(json.dumps(json_value(summary), indent=2, allow_nan=False) + "\n", encoding="utf-8")
-
-    def plot_timeline(self, title: str = "", with_speed: bool = False) -> None:
-        records = self.records()
-        if self.out_dir is not None and records and "fear" in records[0]:
-            plot_timeline(records, self.out_dir / "timeline.png", title=title, extra_speed="speed_mps" if with_speed else None)
-
-
 def drive(options: DriveOptions, out_dir: str | Path | None = None,
           on_step: Callable[[int, int], None] | None = None) -> DriveResult:
     """Run one drive; with ``out_dir`` write its files there. A Ctrl-C stops cleanly with everything so far."""
@@ -145,7 +106,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=camera) if o.controller == "guarded" else None
     route = world.route_m()
     obstacle_xz = world.add_obstacle(o.obstacle, o.ahead_m) if o.obstacle is not None else None
-    recorder = _Recorder(out, fps=FRAME_RATE_HZ, video=o.video)
+    recorder = Recorder(out, fps=FRAME_RATE_HZ, video=o.video)
     total = math.ceil(o.seconds * FRAME_RATE_HZ)
     samples: list[Sample] = []
     guard_ms: list[float] = []
@@ -212,13 +173,14 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
         camera=asdict(camera), vehicle=asdict(limits), rules=rules.name,
     )
     title = f"fearguard in Duckietown: {o.map_name}, {o.controller}" + (f", {o.obstacle} {o.ahead_m:g} m ahead" if o.obstacle else "")
-    records = recorder.records()
-    summary["supervisor"] = summarize(records) if records and "fear" in records[0] else None
+    stats = recorder.stats
+    summary["supervisor"] = stats.to_json() if stats.supervised_frames else None
     summary = json_value(summary)
     recorder.write_summary(summary)
-    if o.plots and out is not None and records:
-        recorder.plot_timeline(title, with_speed=True)
-        plot_drive(records, out / "drive.png", title)
+    if o.plots and out is not None and recorder.frames:
+        if stats.supervised_frames:
+            recorder.plot_timeline(title, with_speed=True)
+        plot_drive(read_jsonl(out / "log.jsonl"), out / "drive.png", title)
     return DriveResult(summary, out, interrupted)
 
 
