@@ -10,7 +10,8 @@ the plots and, now and then, a run that had already finished. Checks, per run:
 - log: every line of log.jsonl (suite: runs.jsonl) parses and the frame numbers are consecutive;
 - video (``run --video``): it decodes at least (logged frames − 1) frames;
 - SIGINT / SIGTERM: summary.json (suite: suite.json) says ``"interrupted": true`` and the exit code is
-  130 / 143, unless the command had finished before the signal (then: interrupted false, exit 0/1).
+  130 / 143, unless the command had finished before the signal (then: interrupted false, exit 0/1) or the
+  signal came after every file was final (then: interrupted false, exit 130 / 143; counted as "late").
 
 Prints one line per run and a table of counts per signal. Takes about 10 minutes on 2 cores.
 """
@@ -115,12 +116,14 @@ def one(command: str, signum: int, delay_s: float, work: Path, k: int) -> Outcom
         video = out / "annotated.mp4"
         decoded = count_frames(video) if video.exists() else 0
         video_ok = decoded >= logged - 1
-    summary_ok = None
+    summary_ok, late = None, False
     if signum != signal.SIGKILL:
         summary = out / ("suite.json" if suite else "summary.json")
         data = json.loads(summary.read_text()) if summary.exists() else None
         if data is None:
             summary_ok, why = False, why or "no summary"
+        elif not finished_first and data.get("interrupted") is False and code == 128 + signum:
+            summary_ok, late = True, True  # the signal came after every file was final: complete, and the exit code says so
         else:
             summary_ok = data.get("interrupted") is (not finished_first)
             if summary_ok and not finished_first and not suite:
@@ -131,7 +134,8 @@ def one(command: str, signum: int, delay_s: float, work: Path, k: int) -> Outcom
         exit_ok = code in (0, 1) if finished_first else code == 128 + signum
     if "Traceback" in (err or ""):
         exit_ok, why = False, why + " traceback on stderr"
-    return Outcome(command, signum, delay_s, code, finished_first, log_ok, logged, video_ok, decoded, summary_ok, exit_ok, why)
+    return Outcome(command, signum, delay_s, code, finished_first, log_ok, logged, video_ok, decoded, summary_ok, exit_ok,
+                   why + (" signal after the work was done" if late else ""))
 
 
 def main() -> int:

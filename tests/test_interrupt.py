@@ -24,6 +24,18 @@ def test_a_signal_sets_the_flag_and_the_exit_code() -> None:
     assert signal.getsignal(signal.SIGTERM) is before
 
 
+def test_a_process_about_to_exit_ignores_late_signals() -> None:
+    before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        with stop_on_signals(ignore_after=True):
+            pass
+        assert signal.getsignal(signal.SIGTERM) == signal.SIG_IGN
+        os.kill(os.getpid(), signal.SIGTERM)  # ignored: the finished run is not killed
+    finally:
+        for s, handler in before.items():
+            signal.signal(s, handler)
+
+
 def test_without_a_frame_loop_the_first_signal_interrupts() -> None:
     with stop_on_signals(StopSignal(raise_at_once=True)) as stop:
         with pytest.raises(KeyboardInterrupt):

@@ -470,12 +470,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    with stop_on_signals(StopSignal(raise_at_once=True)) as stop:  # before anything else: a Ctrl-C from here on is ours
+def main(argv: Sequence[str] | None = None, *, exiting: bool = False) -> int:
+    """Run one command; ``exiting``: the process ends right after (signals are then ignored, not restored)."""
+    with stop_on_signals(ignore_after=exiting) as stop:  # before anything else: a Ctrl-C from here on is ours
         try:
             args = build_parser().parse_args(argv)
             args.stop = stop
-            stop.raise_at_once = args.command not in FRAME_LOOPS
+            if args.command not in FRAME_LOOPS:  # no frame to finish: stop at once (also for a signal during start-up)
+                stop.raise_at_once = True
+                if stop:
+                    raise KeyboardInterrupt
             code = int(args.func(args))
             if stop:  # the signal came after the work was done and written: still say so in the exit code
                 print(f"interrupted by {stop.name} (after the work was done)", file=sys.stderr)
@@ -492,5 +496,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return 0
 
 
+def entry() -> None:
+    """The ``fearguard`` console script."""
+    sys.exit(main(exiting=True))
+
+
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    entry()

@@ -52,10 +52,12 @@ class StopSignal:
 
 
 @contextmanager
-def stop_on_signals(stop: StopSignal | None = None) -> Iterator[StopSignal]:
+def stop_on_signals(stop: StopSignal | None = None, *, ignore_after: bool = False) -> Iterator[StopSignal]:
     """While inside: SIGINT/SIGTERM set the flag (a second one, or any with ``raise_at_once``, raises KeyboardInterrupt).
 
-    The previous handlers are restored on the way out.
+    The previous handlers are restored on the way out; with ``ignore_after`` (a process about to exit,
+    its work written) the signals are ignored instead, so one arriving during interpreter shutdown
+    cannot turn a finished run into a killed one.
     """
     stop = StopSignal() if stop is None else stop
     if threading.current_thread() is not threading.main_thread():
@@ -73,4 +75,4 @@ def stop_on_signals(stop: StopSignal | None = None) -> Iterator[StopSignal]:
         yield stop
     finally:
         for s, old in previous.items():
-            signal.signal(s, old)
+            signal.signal(s, signal.SIG_IGN if ignore_after else old)
