@@ -86,22 +86,28 @@ def test_a_broken_rule_file_fails_with_a_counterexample_that_replays(tmp_path, c
     assert "holds now" in capsys.readouterr().out
 
 
-def test_a_car_that_cannot_stop_within_its_sensor_range_fails_safe_distance(tmp_path, capsys) -> None:
+def test_a_car_too_fast_for_its_sensor_range_fails_or_is_capped(tmp_path, capsys) -> None:
+    # 30 m/s needs 90 m to stop; its range sensor sees 80 m: either verify fails invariant 2 with a replayable
+    # counterexample, or the supervisor caps the speed at what the sensor sees (never a silent unsafe pass)
     car = tmp_path / "fast_car.toml"
-    car.write_text("[vehicle]\nmax_speed_mps = 30.0\nmax_decel_mps2 = 6.0\nreaction_time_s = 0.5\nstop_margin_m = 1.0\n"
-                   "ultrasonic_min_range_m = 0.3\nultrasonic_max_range_m = 80.0\n")
+    car.write_text("max_speed_mps = 30.0\nmax_decel_mps2 = 6.0\nreaction_time_s = 0.5\nstop_margin_m = 1.0\n"
+                   "has_ultrasonic = true\nultrasonic_min_range_m = 0.3\nultrasonic_max_range_m = 80.0\n")
     code, out = verify(tmp_path, capsys, "--rules", str(RULES / "road_car.toml"), "--vehicle", str(car), "--only", "2", "--examples", "60")
-    assert code == 1 and "nothing in range: an obstacle may stand just beyond the sensor's maximum range" in out, out
-    saved = tmp_path / "cx" / "safe_distance.jsonl"
-    header, case = load_case(saved)
-    assert header["vehicle"]["max_speed_mps"] == 30.0 and len(case.run("drive")) > 1
-    assert main(["verify", "--replay", str(saved)]) == 1
+    if code == 1:
+        assert "nothing in range: an obstacle may stand just beyond the sensor's maximum range" in out, out
+        assert main(["verify", "--replay", str(tmp_path / "cx" / "safe_distance.jsonl")]) == 1
+        return
+    assert code == 0, out
+    subject = Subject.of(RULES / "road_car.toml", str(car))
+    calm = fg.Cues(1.0, 130.0, 0.0, math.inf, 0.0)
+    top = max(c.speed_limit_mps for c in run(subject, tuple(Step(t_s=0.1 * k, cues=calm) for k in range(300))).commands)
+    assert top * 0.5 + top * top / 12.0 <= 79.0 + 1e-9 and top > 20.0  # stops within the 79 m it sees, and still drives
 
 
 @pytest.mark.parametrize(("args", "says"), [
     (["--vehicle", "no_brakes.toml"], "VehicleLimits.max_decel_mps2 must be > 0"),
     (["--vehicle", "no_such_car"], "neither a preset"),
-    (["--vehicle", "typo.toml"], "unknown vehicle key(s) ['max_sped_mps']"),
+    (["--vehicle", "typo.toml"], "max_sped_mps"),
     (["--rules", "nothing_here.toml"], "no such file"),
     (["--steer", "no_such_module_xyz:steer"], "cannot import 'no_such_module_xyz'"),
     (["--steer", "math"], "expected module:function"),
@@ -109,10 +115,10 @@ def test_a_car_that_cannot_stop_within_its_sensor_range_fails_safe_distance(tmp_
 ])
 def test_a_bad_file_is_rejected_with_exit_2(tmp_path, capsys, monkeypatch, args, says) -> None:
     monkeypatch.chdir(tmp_path)
-    (tmp_path / "no_brakes.toml").write_text("[vehicle]\nmax_decel_mps2 = 0.0\n")
-    (tmp_path / "typo.toml").write_text("[vehicle]\nmax_sped_mps = 2.0\n")
+    (tmp_path / "no_brakes.toml").write_text("max_decel_mps2 = 0.0\n")
+    (tmp_path / "typo.toml").write_text("max_sped_mps = 2.0\n")
     code, out = verify(tmp_path, capsys, *args)
-    assert code == 2 and says in out, out
+    assert code == 2 and says in out and ("unknown" in out or "typo" not in args[-1]), out
 
 
 def test_the_bundled_default_passes_every_invariant(tmp_path, capsys) -> None:

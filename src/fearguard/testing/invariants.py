@@ -584,7 +584,7 @@ def check_deterministic(subject: Subject, case: Case) -> str | None:
 
 
 # -- 9. liveness of the recovery ------------------------------------------------------------------
-RECOVERY_WAIT_S = 60.0  # [s] standing still in a road-picture emergency: the creep must have come by then
+RECOVERY_WAIT_S = 30.0  # [s] standing still in a road-picture emergency: the creep must have come by then
 RECOVERY_KEYS = ("recovery_dwell_s", "recovery_creep_s", "recovery_max_creeps")  # [policy] numbers of the recovery (issue 10)
 
 
