@@ -1,16 +1,26 @@
 """Speed of one supervised frame: all cues + fear + command, against reading (decoding) the same frame.
 
-    python benchmarks/bench_perception.py
+    python benchmarks/bench_perception.py                       # this tree
+    python benchmarks/bench_perception.py --against /work/base/src   # + ratios against another tree, interleaved
 
 For 640×480 and 1280×720 frames made from the real road stills (../shared/data/road/images): the
 median time of ``FearGuard.step`` on a frame (perception with QR scan, lane steering, fuzzy fear,
 policy), the ratio to ``cv2.imdecode`` of the same frame as JPEG measured in the same run, and the
 share of each stage. One core: OpenCV is limited to one thread. Goal: ≤ 5 ms median at 640×480.
+
+``--against SRC``: the full per-frame perception (``Perception.perceive``: lanes, confidence, occlusion, lead, QR every
+3rd frame) of this tree and of the tree whose ``src`` folder is SRC, each in its own worker process, timed round by round
+alternately with a bare Canny + probabilistic Hough pass over the whole 640×480 frame (in this process) — the ratios
+new/old and new/Hough come from one interleaved run, so machine load affects all three alike.
 """
 
 from __future__ import annotations
 
+import argparse
+import math
 import statistics
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -64,8 +74,71 @@ def bench(size: tuple[int, int]) -> None:
     print("   stage shares (medians; qr: mean): " + ", ".join(f"{k} {v:.2f} ms ({100 * v / total:.0f} %)" for k, v in parts.items()))
 
 
+WORKER = r"""
+import sys, time, statistics, cv2, numpy as np
+cv2.setNumThreads(1)
+sys.path.insert(0, sys.argv[1])
+import fearguard as fg
+from fearguard.perception import Perception
+from pathlib import Path
+frames = [cv2.resize(cv2.imread(str(p)), (640, 480), interpolation=cv2.INTER_AREA) for p in sorted(Path(sys.argv[2]).glob("*.jpg"))]
+perception = Perception(fg.VehicleLimits(has_qr_localisation=True))
+t_s = 0.0
+for line in sys.stdin:
+    times = []
+    for i in range(int(line)):
+        t_s += 0.05
+        obs = fg.Observation(t_s=t_s, speed_mps=1.0, frame=frames[i % len(frames)], ultrasonic_range_m=2.0, odometer_m=t_s)
+        start = time.perf_counter()
+        perception.perceive(obs)
+        times.append((time.perf_counter() - start) * 1e3)
+    print(statistics.fmean(times), flush=True)
+"""
+
+
+def canny_hough_ms(frames: list[np.ndarray], count: int) -> float:
+    """Mean time of the bare classic pass: grey, Canny, probabilistic Hough over the whole frame."""
+    start = time.perf_counter()
+    for i in range(count):
+        gray = cv2.cvtColor(frames[i % len(frames)], cv2.COLOR_BGR2GRAY)
+        cv2.HoughLinesP(cv2.Canny(gray, 50, 150), 1, math.pi / 180, 20, minLineLength=20, maxLineGap=10)
+    return (time.perf_counter() - start) / count * 1e3
+
+
+def compare(against: Path, rounds: int = 12, per_round: int = 42) -> None:
+    """Per-frame perception of this tree vs the tree at ``against`` and vs Canny + Hough, interleaved round by round."""
+    here = Path(__file__).resolve().parents[1] / "src"
+    workers = {name: subprocess.Popen([sys.executable, "-c", WORKER, str(src), str(DATA)], stdin=subprocess.PIPE,
+                                      stdout=subprocess.PIPE, text=True) for name, src in (("new", here), ("old", against))}
+    frames = frames_at((640, 480))
+    times: dict[str, list[float]] = {"new": [], "old": [], "hough": []}
+    for r in range(rounds + 1):  # round 0 warms up (imports, caches) and is not counted
+        for name, proc in workers.items():
+            proc.stdin.write(f"{per_round}\n")
+            proc.stdin.flush()
+            ms = float(proc.stdout.readline())
+            if r:
+                times[name].append(ms)
+        ms = canny_hough_ms(frames, per_round)
+        if r:
+            times["hough"].append(ms)
+    for proc in workers.values():
+        proc.stdin.close()
+        proc.wait()
+    med = {k: statistics.median(v) for k, v in times.items()}
+    print(f"640×480 per-frame perception (mean per round, median of {rounds} rounds): new {med['new']:.2f} ms, "
+          f"old ({against}) {med['old']:.2f} ms, Canny + HoughP {med['hough']:.2f} ms")
+    print(f"   ratio new/old {med['new'] / med['old']:.3f} (goal ≤ 1.05), new/Canny+Hough {med['new'] / med['hough']:.3f} (goal ≤ 1)")
+
+
 def main() -> None:
     cv2.setNumThreads(1)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--against", type=Path, help="src folder of another fearguard tree to compare with")
+    args = parser.parse_args()
+    if args.against is not None:
+        compare(args.against)
+        return
     for size in ((640, 480), (1280, 720)):
         bench(size)
 

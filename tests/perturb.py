@@ -30,3 +30,42 @@ def with_vehicle(
     cv2.rectangle(out, (x0 + lw // 2, ly), (x0 + lw // 2 + lw, ly + lw // 2), (40, 40, 230), -1)
     cv2.rectangle(out, (x1 - lw // 2 - lw, ly), (x1 - lw // 2, ly + lw // 2), (40, 40, 230), -1)
     return out
+
+
+OCCLUDER_COLOURS = {  # BGR: the colours trucks, vans and cars come in, and a red one
+    "black": (12, 12, 12), "grey": (110, 110, 110), "white": (240, 240, 240), "silver": (190, 192, 195), "red": (40, 40, 200),
+}
+OCCLUDER_BOXES = {  # (u0, v0, u1, v1) shares of the frame
+    "middle": (0.25, 0.60, 0.78, 0.86),  # over the middle of the road, both boundaries (a vehicle ahead)
+    "right": (0.55, 0.66, 0.95, 0.90),  # over the right boundary (a vehicle cutting in)
+    "bottom": (0.10, 0.72, 0.90, 1.00),  # reaching the frame bottom (something right in front of the camera)
+}
+
+
+def with_box(frame: np.ndarray, box: tuple[float, float, float, float], colour: tuple[int, int, int]) -> np.ndarray:
+    """A filled box over the frame; box = (u0, v0, u1, v1) shares."""
+    out = frame.copy()
+    h, w = out.shape[:2]
+    cv2.rectangle(out, (int(box[0] * w), int(box[1] * h)), (int(box[2] * w), int(box[3] * h)), colour, -1)
+    return out
+
+
+def garbage_frames(seed: int = 1, size: tuple[int, int] = (640, 480)) -> dict[str, np.ndarray]:
+    """What a broken camera or a wrong pixel format emits: uniform and Gaussian noise, blocky and smooth random
+    textures at three scales (fixed seed)."""
+    rng = np.random.default_rng(seed)
+    w, h = size
+    frames = {f"uniform noise {i}": rng.integers(0, 256, (h, w, 3), dtype=np.uint8) for i in range(5)}
+    frames.update({f"gaussian noise {i}": np.clip(rng.normal(128, 40, (h, w, 3)), 0, 255).astype(np.uint8) for i in range(3)})
+    for cell in (3, 7, 15):
+        tile = rng.integers(0, 256, (h // cell + 1, w // cell + 1, 3), dtype=np.uint8)
+        frames[f"blocks {cell} px"] = cv2.resize(tile, (w, h), interpolation=cv2.INTER_NEAREST)
+        frames[f"smooth texture {cell} px"] = cv2.resize(tile, (w, h), interpolation=cv2.INTER_CUBIC)
+    return frames
+
+
+def not_frozen(frame: np.ndarray, i: int) -> np.ndarray:
+    """The frame with one corner pixel changed: a real camera never sends the same bytes twice (the frozen check)."""
+    out = frame.copy()
+    out[0, 0] = i % 256
+    return out

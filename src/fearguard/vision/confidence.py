@@ -14,13 +14,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fearguard.vision.lanes import LaneLine, RoadRegion
+from fearguard.vision.lanes import LaneLine, RoadRegion, geometry_plausibility, vanishing_point  # noqa: F401
 
-WIDTH_RANGE = (0.15, 1.6)  # [-] plausible lane width at the region's middle row, as a share of the image width
-VP_ABOVE_TOP = 0.25  # [-] of the height: the lines may meet at most this far above the region top ...
-VP_BELOW_TOP = 0.04  # [-] ... and at most this far below it (lines crossing on the road are impossible)
-VP_U_RANGE = (0.1, 0.9)  # [-] of the width: where the vanishing point may lie horizontally
-RAMP = 0.1  # [-] of the image size: plausibility falls from 1 to 0 over this distance outside a range
 CLIPPED_BLIND = 0.5  # [-] share of clipped road pixels at which the picture counts as blind
 OCCLUDED_BLIND = 0.8  # [-] occlusion at which the visible rest of the markings no longer vouches for the lane
 AGREEMENT_SCALE = 0.35  # [-] of the lane width: mean disagreement with the track at which agreement reaches 0
@@ -36,39 +31,6 @@ class LaneEvidence:
     geometry: float
     agreement: float
     visibility: float
-
-
-def _inside(x: float, lo: float, hi: float, ramp: float) -> float:
-    """1 inside [lo, hi], falling linearly to 0 at ramp outside."""
-    if lo <= x <= hi:
-        return 1.0
-    d = lo - x if x < lo else x - hi
-    return max(0.0, 1.0 - d / ramp)
-
-
-def vanishing_point(left: LaneLine, right: LaneLine) -> tuple[float, float] | None:
-    """Where the two boundaries meet (u, v); None if they are parallel in the image."""
-    den = left.slope - right.slope
-    if abs(den) < 1e-9:
-        return None
-    v = (right.intercept_px - left.intercept_px) / den
-    return left.u_at(v), v
-
-
-def geometry_plausibility(left: LaneLine, right: LaneLine, region: RoadRegion) -> float:
-    """1 when lane width and vanishing point look like a lane seen from a forward camera, else falling to 0."""
-    w, h = region.width_px, region.height_px
-    mid = 0.5 * (region.top_v_px + region.bottom_v_px)
-    width = (right.u_at(mid) - left.u_at(mid)) / w
-    vp = vanishing_point(left, right)
-    if vp is None or width <= 0:
-        return 0.0
-    vp_u, vp_v = vp[0] / w, (vp[1] - region.top_v_px) / h
-    return min(
-        _inside(width, *WIDTH_RANGE, RAMP),
-        _inside(vp_v, -VP_ABOVE_TOP, VP_BELOW_TOP, RAMP),
-        _inside(vp_u, *VP_U_RANGE, RAMP),
-    )
 
 
 def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadRegion, lane_width_px: float) -> float:

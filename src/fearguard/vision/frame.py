@@ -30,7 +30,7 @@ from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
 from fearguard.vision.exposure import Exposure, road_exposure
 from fearguard.vision.lanes import LaneLine, RoadRegion, detect_lanes, region_mask, road_region, work_size
 from fearguard.vision.lead import detect_lead, lead_from_box
-from fearguard.vision.occlusion import default_lines, occlusion, road_reference
+from fearguard.vision.occlusion import default_lines, occlusion, road_appearance, road_reference, surface_maps
 from fearguard.vision.qr import detect_qr
 from fearguard.vision.steering import aim_point_u, lookahead_row, steering_from_aim
 from fearguard.vision.trackers import Trackers
@@ -222,7 +222,10 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
         found = detect_lead(p.gray, p.hls, p.region, expected_l, expected_r, reference)
         box = trackers.leads.update(t_s, found.scaled(p.scale) if found is not None else None)
     boxes = (box.scaled(1.0 / p.scale).as_int(),) if box is not None else ()
-    occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, reference, boxes)
+    surface = surface_maps(p.gray, p.hls, lanes.features, p.region)
+    measured = road_appearance(p.gray, p.hls, p.region, expected_l, expected_r, surface)
+    occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, trackers.road.reference(measured), boxes, surface)
+    trackers.road.learn(measured, occ)
     lead = lead_from_box(box, p.camera) if box is not None else None
     return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference)
 

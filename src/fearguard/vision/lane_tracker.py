@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     from filterpy.kalman import KalmanFilter
 
 MEASUREMENT_STD = 0.012  # [-] of the width: pixel noise of a detected boundary's end point
+VELOCITY_STD = 0.15  # [-] of the width per s: a new track's rate is unknown but small (a first jump is noise, not motion)
 ACCEL_STD = 0.6  # [-] of the width per s²: how fast a boundary may move in the image (curves, steering)
 GATE_CHI2 = 13.8  # [-] chi-square, 2 dof, p = 0.001: detections beyond this are outliers
 REINIT_AFTER = 3  # [frames] consecutive outliers that re-initialise the track
@@ -44,7 +45,7 @@ class BoundaryTrack:
         kf.H = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]])
         r = (MEASUREMENT_STD * self.width_px) ** 2
         kf.R = np.eye(2) * r
-        kf.P = np.diag([r, r, (0.5 * self.width_px) ** 2, (0.5 * self.width_px) ** 2])
+        kf.P = np.diag([r, r, (VELOCITY_STD * self.width_px) ** 2, (VELOCITY_STD * self.width_px) ** 2])
         return kf
 
     def predict(self, dt_s: float) -> None:

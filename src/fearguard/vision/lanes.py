@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
+from fearguard.vision.ridges import RidgeMaps, ridge_maps, scan_ridges
 
 WORK_WIDTH_PX = 320  # [px] frames are analysed at this width (aspect kept): the cost is then fixed
 TOP_FRACTION = 0.62  # [-] road region starts at this share of the height without a camera model (dash-cam horizon ≈ 0.58)
@@ -28,10 +29,15 @@ PITCHED_DEG = 8.0  # [deg] a camera pitched down at least this much gets the nea
 SIDE_FRACTION = 0.75  # [-] of the road region's height: with a camera model, the near part searched across the full width
 HORIZON_MARGIN = 0.04  # [-] with a camera model the region starts this share of the height below the horizon
 TOPHAT_WIDTH = 0.055  # [-] top-hat window as a share of the width: wider than a far marking, narrower than a far lane
-NEAR_TOPHAT_WIDTH = 0.2  # [-] the same in the near half of the road region (a dash-cam's near marking: ~10 px)
+NEAR_TOPHAT_WIDTH = 0.1  # [-] the same in the near half of the road region (a dash-cam's near marking: ~10 px)
 TOPHAT_WIDTH_PITCHED = 0.12  # [-] far window with a camera model: a low camera pitched down sees wide tape ...
 NEAR_TOPHAT_WIDTH_PITCHED = 0.35  # [-] ... and near window (a model car's tape: ~60 px across there)
-RIDGE_MIN = 22  # [grey levels] a marking must be this much brighter than the road beside it
+MARKING_SHARE = (0.012, 0.12)  # [-] of the lane width: paint width on a road (10-30 cm lines on 3-3.7 m lanes) ...
+MARKING_SHARE_PITCHED = (0.05, 0.4)  # [-] ... and with a low pitched-down camera (a model car's 48 mm tape on ~0.2 m lanes)
+CLUTTER = (0.2, 0.45)  # [-] a road region is mostly road: beyond this share of marking pixels ridges are texture ...
+CLUTTER_PITCHED = (0.3, 0.6)  # [-] ... (a model car's wide tape fills more of its near view)
+RIDGE_MIN = 14  # [grey levels] a marking must be this much brighter than the road beside it ...
+RIDGE_RATIO = 0.15  # [-] ... and by this share of the road's own lightness (a ratio: the same in sun and shade)
 YELLOW_HUE = (14, 40)  # [OpenCV hue 0..180] yellow paint
 YELLOW_SAT_MIN = 70  # [0..255] saturation of yellow paint
 YELLOW_LIGHT_MIN = 70  # [0..255] lightness of yellow paint
@@ -41,10 +47,19 @@ HOUGH_MIN_LENGTH = 0.03  # [-] of the width
 HOUGH_MAX_GAP = 0.03  # [-] of the width
 FIT_OUTLIER_PX = 0.03  # [-] of the width: a segment whose end points are this close to a line supports it
 RANSAC_MAX_SEGMENTS = 40  # [-] per side
-RANSAC_KEEP = 0.6  # [-] lines with this share of the best support compete; the innermost wins
+RANSAC_KEEP = 0.4  # [-] lines with this share of the best support compete (marking evidence decides)
+CANDIDATES = 3  # [-] competing lines per side, scanned for marking ridges
+PREFER_SHARE = 0.8  # [-] a later candidate must beat the preferred one's ridge support by more than 1/this
 MIN_OFF_CENTRE = 0.08  # [-] of the width: a boundary this close to the image centre at the bottom is a seam, not a lane edge
-SUPPORT_BAND_PX = 2  # [px] a feature pixel within this of the line supports it
-SUPPORT_FULL = 0.35  # [-] covering this share of the rows counts as full support (a dashed line covers about this)
+DEFAULT_HALF_WIDTH = 0.32  # [-] of the width: default lane's half-width at the bottom row (dash-cam, centred)
+MIN_LANE_WIDTH = 0.1  # [-] of the width at the bottom row: narrower than this, two boundaries are not one lane
+REFIT_MIN_ROWS = 6  # [rows] marking ridges needed to refit a boundary on their inner edges
+REFIT_MAX_SLOPE_CHANGE = 0.5  # [px/px] a refit turning the line more than this is a different line: the Hough fit stays
+LANE_WIDTH_RANGE = (0.15, 1.6)  # [-] plausible lane width at the region's middle row, as a share of the image width
+VP_ABOVE_TOP = 0.25  # [-] of the height: the lines may meet at most this far above the region top ...
+VP_BELOW_TOP = 0.04  # [-] ... and at most this far below it (lines crossing on the road are impossible)
+VP_U_RANGE = (0.1, 0.9)  # [-] of the width: where the vanishing point may lie horizontally
+RAMP = 0.1  # [-] of the image size: plausibility falls from 1 to 0 over this distance outside a range
 
 
 @dataclass(frozen=True)
@@ -58,6 +73,8 @@ class RoadRegion:
     polygon_px: tuple[tuple[int, int], ...]
     far_tophat: float = 0.055  # [-] of the width: top-hat window in the far half of the region
     near_tophat: float = 0.2  # [-] of the width: top-hat window in the near half (markings are widest there)
+    marking_share: tuple[float, float] = MARKING_SHARE  # [-] of the lane width: narrowest and widest paint
+    clutter: tuple[float, float] = CLUTTER  # [-] share of the region that is marking pixels: full evidence up to, none from
 
 
 @dataclass(frozen=True)
@@ -66,7 +83,7 @@ class LaneLine:
 
     slope: float  # [px/px] du/dv
     intercept_px: float
-    support: float  # [0..1] share of the region's rows with marking pixels on the line, saturating at SUPPORT_FULL
+    support: float  # [0..1] share of the region's rows with a marking ridge on the line, saturating (ridges.SUPPORT_FULL)
     segments: int  # Hough segments that built it
 
     def u_at(self, v_px: float) -> float:
@@ -82,6 +99,40 @@ class LaneDetection:
     right: LaneLine | None
     features: np.ndarray  # uint8 0/255 marking pixels inside the region
     segment_count: int
+    maps: RidgeMaps | None = None  # the ridge tables (their marking-pixel integral serves occlusion too)
+
+
+def _inside(x: float, lo: float, hi: float, ramp: float) -> float:
+    """1 inside [lo, hi], falling linearly to 0 at ramp outside."""
+    if lo <= x <= hi:
+        return 1.0
+    d = lo - x if x < lo else x - hi
+    return max(0.0, 1.0 - d / ramp)
+
+
+def vanishing_point(left: LaneLine, right: LaneLine) -> tuple[float, float] | None:
+    """Where the two boundaries meet (u, v); None if they are parallel in the image."""
+    den = left.slope - right.slope
+    if abs(den) < 1e-9:
+        return None
+    v = (right.intercept_px - left.intercept_px) / den
+    return left.u_at(v), v
+
+
+def geometry_plausibility(left: LaneLine, right: LaneLine, region: RoadRegion) -> float:
+    """1 when lane width and vanishing point look like a lane seen from a forward camera, else falling to 0."""
+    w, h = region.width_px, region.height_px
+    mid = 0.5 * (region.top_v_px + region.bottom_v_px)
+    width = (right.u_at(mid) - left.u_at(mid)) / w
+    vp = vanishing_point(left, right)
+    if vp is None or width <= 0:
+        return 0.0
+    vp_u, vp_v = vp[0] / w, (vp[1] - region.top_v_px) / h
+    return min(
+        _inside(width, *LANE_WIDTH_RANGE, RAMP),
+        _inside(vp_v, -VP_ABOVE_TOP, VP_BELOW_TOP, RAMP),
+        _inside(vp_u, *VP_U_RANGE, RAMP),
+    )
 
 
 def work_size(width_px: int, height_px: int) -> tuple[int, int]:
@@ -106,7 +157,10 @@ def road_region(width_px: int, height_px: int, camera: CameraModel | None = None
     polygon = ((0, bottom_v), (0, side_v), (int(0.38 * w), top_v), (int(0.62 * w), top_v), (w, side_v), (w, bottom_v))
     if not pitched:
         return RoadRegion(width_px, height_px, top_v, bottom_v, polygon, TOPHAT_WIDTH, NEAR_TOPHAT_WIDTH)
-    return RoadRegion(width_px, height_px, top_v, bottom_v, polygon, TOPHAT_WIDTH_PITCHED, NEAR_TOPHAT_WIDTH_PITCHED)
+    return RoadRegion(
+        width_px, height_px, top_v, bottom_v, polygon, TOPHAT_WIDTH_PITCHED, NEAR_TOPHAT_WIDTH_PITCHED, MARKING_SHARE_PITCHED,
+        CLUTTER_PITCHED,
+    )
 
 
 def region_mask(region: RoadRegion) -> np.ndarray:
@@ -122,7 +176,7 @@ def marking_features(hls: np.ndarray, mask: np.ndarray, region: RoadRegion | Non
     Markings widen toward the camera, so the top-hat window is wider in the near half of the road region.
     """
     hue, light, sat = hls[:, :, 0], hls[:, :, 1], hls[:, :, 2]
-    light = cv2.GaussianBlur(light, (3, 3), 0)  # the classic smoothing step: sensor noise must not make ridges
+    light = smoothed_light(hls)
     w = hls.shape[1]
     far = region.far_tophat if region is not None else TOPHAT_WIDTH
     ridge_l, ridge_s = _tophat(light, far * w), _tophat(sat, far * w)
@@ -130,11 +184,17 @@ def marking_features(hls: np.ndarray, mask: np.ndarray, region: RoadRegion | Non
         near = slice((region.top_v_px + region.bottom_v_px) // 2, region.bottom_v_px + 1)
         ridge_l[near] = _tophat(light[near], region.near_tophat * w)
         ridge_s[near] = _tophat(sat[near], region.near_tophat * w)
-    bright = ridge_l >= RIDGE_MIN
+    background = light.astype(np.int16) - ridge_l  # the opening: the road's lightness under the marking
+    bright = (ridge_l >= RIDGE_MIN) & (ridge_l >= RIDGE_RATIO * background)
     yellow = (hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]) & (sat >= YELLOW_SAT_MIN) & (light >= YELLOW_LIGHT_MIN)
     yellow &= ridge_s >= RIDGE_MIN
     features = ((bright | yellow) * np.uint8(255)).astype(np.uint8)
     return cv2.bitwise_and(features, mask)
+
+
+def smoothed_light(hls: np.ndarray) -> np.ndarray:
+    """HLS lightness, 3×3 Gaussian-smoothed: the classic smoothing step (sensor noise must not make ridges)."""
+    return cv2.GaussianBlur(hls[:, :, 1], (3, 3), 0)
 
 
 def _tophat(channel: np.ndarray, width_px: float) -> np.ndarray:
@@ -171,18 +231,28 @@ def split_by_slope(segments: np.ndarray, width_px: int) -> tuple[np.ndarray, np.
 
 
 def fit_line(segments: np.ndarray, region: RoadRegion, prior: LaneLine | None = None) -> tuple[float, float] | None:
-    """The boundary among one side's segments: the best-supported line (RANSAC over segment hypotheses; among
-    near-ties the one nearest the prior — last frame's tracked boundary — else the innermost, since the ego lane's
-    boundary is the marking nearest the car's path), then a length-weighted least-squares fit u = a·v + b of its
-    inlier segments. The prior keeps a curved boundary, which two straight lines fit about equally, from flipping."""
+    """The preferred boundary among one side's segments (the first of ``candidate_fits``), or None."""
+    fits = candidate_fits(segments, region, prior, 1)
+    return fits[0] if fits else None
+
+
+def candidate_fits(
+    segments: np.ndarray, region: RoadRegion, prior: LaneLine | None = None, count: int = CANDIDATES
+) -> list[tuple[float, float]]:
+    """Up to ``count`` distinct boundary lines among one side's segments, preferred first.
+
+    RANSAC over segment hypotheses; hypotheses with RANSAC_KEEP of the best support compete, ordered by distance to
+    the prior — last frame's tracked boundary — else innermost first (the ego lane's boundary is the marking nearest
+    the car's path); each is the length-weighted least-squares fit u = a·v + b of its inlier segments. The caller
+    picks among them by marking evidence (``ridge_line``); the prior keeps a curved boundary, which two straight
+    lines fit about equally, from flipping."""
     if len(segments) == 0:
-        return None
+        return []
     w = region.width_px
     dv = segments[:, 3] - segments[:, 1]
-    steep = np.abs(dv) > 1e-9
-    seg = segments[steep]
+    seg = segments[np.abs(dv) > 1e-9]
     if len(seg) == 0:
-        return None
+        return []
     if len(seg) > RANSAC_MAX_SEGMENTS:  # hypotheses and voters: the longest segments (bounds the O(n²) cost)
         seg = seg[np.argsort(-np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]))[:RANSAC_MAX_SEGMENTS]]
     slope = (seg[:, 2] - seg[:, 0]) / (seg[:, 3] - seg[:, 1])
@@ -194,22 +264,26 @@ def fit_line(segments: np.ndarray, region: RoadRegion, prior: LaneLine | None = 
     d2 = np.abs(seg[None, :, 2] - (slope[:, None] * seg[None, :, 3] + icpt[:, None]))
     inlier = (d1 <= tol) & (d2 <= tol)
     score = inlier @ length
-    u_bottom = slope * region.bottom_v_px + icpt
-    off_centre = np.abs(u_bottom - 0.5 * w)
+    off_centre = np.abs(slope * region.bottom_v_px + icpt - 0.5 * w)
     candidates = (score >= RANSAC_KEEP * score.max()) & (off_centre >= MIN_OFF_CENTRE * w)
     if not candidates.any():
         candidates = score >= RANSAC_KEEP * score.max()
     if prior is not None:
         rows = np.array([0.5 * (region.top_v_px + region.bottom_v_px), region.bottom_v_px])
-        distance = np.abs(slope[:, None] * rows[None, :] + icpt[:, None] - prior.u_at(rows)[None, :]).mean(axis=1)
-        best = int(np.flatnonzero(candidates)[np.argmin(distance[candidates])])
+        order_key = np.abs(slope[:, None] * rows[None, :] + icpt[:, None] - prior.u_at(rows)[None, :]).mean(axis=1)
     else:
-        best = int(np.flatnonzero(candidates)[np.argmin(off_centre[candidates])])
-    chosen = seg[inlier[best]]
-    v = np.concatenate([chosen[:, 1], chosen[:, 3]])
-    u = np.concatenate([chosen[:, 0], chosen[:, 2]])
-    wts = np.tile(length[inlier[best]], 2)
-    return _weighted_fit(v, u, wts) or (float(slope[best]), float(icpt[best]))
+        order_key = off_centre
+    fits: list[tuple[float, float]] = []
+    taken = np.zeros(len(seg), bool)
+    for best in np.flatnonzero(candidates)[np.argsort(order_key[candidates])]:
+        if taken[best] or len(fits) >= count:
+            continue  # a hypothesis already explained by a preferred line is the same line
+        taken |= inlier[best]
+        chosen = seg[inlier[best]]
+        v = np.concatenate([chosen[:, 1], chosen[:, 3]])
+        u = np.concatenate([chosen[:, 0], chosen[:, 2]])
+        fits.append(_weighted_fit(v, u, np.tile(length[inlier[best]], 2)) or (float(slope[best]), float(icpt[best])))
+    return fits
 
 
 def _weighted_fit(v: np.ndarray, u: np.ndarray, w: np.ndarray) -> tuple[float, float] | None:
@@ -224,17 +298,67 @@ def _weighted_fit(v: np.ndarray, u: np.ndarray, w: np.ndarray) -> tuple[float, f
     return float(a), float(mu - a * mv)
 
 
-def line_support(features: np.ndarray, region: RoadRegion, slope: float, intercept_px: float) -> float:
-    """Share of region rows with a marking pixel within SUPPORT_BAND_PX of the line, scaled so a dashed line is 1."""
+def default_lines(region: RoadRegion) -> tuple[LaneLine, LaneLine]:
+    """A centred lane meeting just above the top of the road region: the prior when nothing is known."""
+    w, top, bottom = region.width_px, region.top_v_px, region.bottom_v_px
+    vp_v = top - 0.04 * region.height_px
+    lines = []
+    for u_bottom in ((0.5 - DEFAULT_HALF_WIDTH) * w, (0.5 + DEFAULT_HALF_WIDTH) * w):
+        slope = (u_bottom - 0.5 * w) / max(1.0, bottom - vp_v)
+        lines.append(LaneLine(slope, u_bottom - slope * bottom, 0.0, 0))
+    return lines[0], lines[1]
+
+
+def lane_width_rows(rows: np.ndarray, priors: tuple[LaneLine | None, LaneLine | None], region: RoadRegion) -> np.ndarray:
+    """The lane width expected on each row (the prior that scales the paint width): the tracked lane when it makes
+    one, else the default lane."""
+    v = rows.astype(np.float64)
+    left, right = priors
+    narrowest = MIN_LANE_WIDTH * region.width_px * (v - v[0] + 1) / (v[-1] - v[0] + 1)  # tapering toward the horizon
+    if left is None or right is None or not (right.u_at(v) - left.u_at(v) >= narrowest).all():
+        left, right = default_lines(region)
+    return right.u_at(v) - left.u_at(v)
+
+
+def ridge_line(
+    maps: RidgeMaps, region: RoadRegion, fit: tuple[float, float], lane_width: np.ndarray, right_side: bool
+) -> tuple[tuple[float, float], float]:
+    """The boundary refitted on the inner edges of the marking ridges along a Hough fit, and its support (ridges.py)."""
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
-    cols = np.rint(slope * rows + intercept_px).astype(np.int64)
-    inside = (cols >= 0) & (cols < region.width_px)
-    if not inside.any():
-        return 0.0
-    band = cv2.dilate(features, np.ones((1, 2 * SUPPORT_BAND_PX + 1), np.uint8)) if SUPPORT_BAND_PX else features
-    hits = band[rows[inside], cols[inside]] > 0
-    covered = hits.sum() / len(rows)
-    return float(min(1.0, covered / SUPPORT_FULL))
+    scan = scan_ridges(maps, rows, fit[0] * rows + fit[1], lane_width, right_side, region.marking_share)
+    ok = scan.ok
+    if ok.sum() >= REFIT_MIN_ROWS:
+        refit = _weighted_fit(rows[ok].astype(np.float64), scan.inner_u[ok], np.ones(int(ok.sum())))
+        if refit is not None and abs(refit[0] - fit[0]) < REFIT_MAX_SLOPE_CHANGE:
+            fit = refit
+    return fit, scan.support
+
+
+def best_pair(
+    lefts: list[LaneLine], rights: list[LaneLine], region: RoadRegion
+) -> tuple[LaneLine | None, LaneLine | None]:
+    """The left/right candidates (preferred first) that make the best lane: mean support × geometry, where a later
+    candidate's support counts PREFER_SHARE less (it must be clearly better). A side without candidates contributes
+    no support; two lines that make no lane are at best one boundary of it."""
+    best: tuple[float, LaneLine | None, LaneLine | None] = (0.0, None, None)
+    for i, left in enumerate(lefts or [None]):
+        for j, right in enumerate(rights or [None]):
+            s_l = left.support * (PREFER_SHARE if i else 1.0) if left is not None else 0.0
+            s_r = right.support * (PREFER_SHARE if j else 1.0) if right is not None else 0.0
+            geometry = geometry_plausibility(left, right, region) if left is not None and right is not None else 1.0
+            score, pair = 0.5 * (s_l + s_r) * geometry, (left, right)
+            if left is not None and right is not None and geometry <= 0.0:
+                score = 0.5 * max(s_l, s_r) * PREFER_SHARE
+                pair = (left, None) if s_l >= s_r else (None, right)
+            if score > best[0]:
+                best = (score, *pair)
+    return best[1], best[2]
+
+
+def _plainness(paint_share: float, clutter: tuple[float, float]) -> float:
+    """1 while marking pixels cover at most clutter[0] of the region, falling linearly to 0 at clutter[1]: in noise
+    or a random texture everything is a ridge somewhere, and ridges found there are no evidence of paint."""
+    return float(min(1.0, max(0.0, (clutter[1] - paint_share) / (clutter[1] - clutter[0]))))
 
 
 def detect_lanes(
@@ -246,15 +370,24 @@ def detect_lanes(
     crop = replace(region, top_v_px=0, bottom_v_px=region.bottom_v_px - region.top_v_px, height_px=region.bottom_v_px - region.top_v_px + 1)
     features = np.zeros(mask.shape, np.uint8)
     features[band] = marking_features(hls[band], mask[band], crop)
+    light = np.zeros(mask.shape, np.uint8)
+    light[band] = smoothed_light(hls[band])
+    maps = ridge_maps((light, hls[:, :, 2]), features, region.top_v_px, region.bottom_v_px)
     segments = hough_segments(features[band])
     segments[:, [1, 3]] += region.top_v_px
-    left_s, right_s = split_by_slope(segments, region.width_px)
-    lines: list[LaneLine | None] = []
-    for side, prior in zip((left_s, right_s), priors, strict=True):
-        fit = fit_line(side, region, prior)
-        if fit is None:
-            lines.append(None)
-            continue
-        support = line_support(features, region, *fit)
-        lines.append(LaneLine(fit[0], fit[1], support, len(side)) if support > 0 else None)
-    return LaneDetection(region, lines[0], lines[1], features, len(segments))
+    sides = split_by_slope(segments, region.width_px)
+    lane_width = lane_width_rows(np.arange(region.top_v_px, region.bottom_v_px + 1), priors, region)
+    plain = _plainness(maps.paint_integral[-1, -1] / max(1, cv2.countNonZero(mask)), region.clutter)
+    found: list[list[LaneLine]] = []
+    for i, (side, prior) in enumerate(zip(sides, priors, strict=True)):
+        lines = []
+        for fit in candidate_fits(side, region, prior):
+            (a, b), support = ridge_line(maps, region, fit, lane_width, right_side=i == 1)
+            support *= plain
+            if support > 0:
+                lines.append(LaneLine(a, b, support, len(side)))
+            if support >= PREFER_SHARE and len(lines) == 1:
+                break  # the preferred line is well supported: no later one can beat it clearly
+        found.append(lines)
+    left, right = best_pair(found[0], found[1], region)
+    return LaneDetection(region, left, right, features, len(segments), maps)

@@ -2,39 +2,149 @@
 
 Definition (measurable, see docs/perception.md): the expected marking region is a band along each
 expected boundary (tracked, else detected, else a default lane) sampled every ``ROW_STEP`` rows from
-the road region's top to its bottom. A sample is *hidden* when the pixels at it are neither road nor
-paint: their median grey differs from the road reference by more than ``FOREIGN_DEV`` (relative, with
-an absolute floor) or they are strongly coloured but not yellow (car paint), and there is no marking
-pixel in the band. Samples inside a known vehicle box are hidden too. occlusion = hidden / samples.
-Road-like means close to the road reference of the bottom rows (the road just ahead) *or* to the road
-across the same row (so pale concrete after dark asphalt, or a shadow across the whole road, is road).
+the road region's top to its bottom. A sample is *hidden* when there is no marking pixel in its band and
+the pixels there do not look like road — compared with a *road appearance* (``RoadAppearance``: grey level,
+saturation and roughness of the lane interior; ``RoadModel`` keeps it over recent frames, so one frame's
+occluder, even one reaching the frame bottom, does not become the idea of road): they are much brighter, or
+darker than any shadow, or strongly coloured but not yellow (car paint), or smooth where the road is rough
+(texture: the coefficient of variation of a small patch — a ratio, so it survives shade; a painted body panel,
+a box, a sheet are smooth). A shadow keeps the road's texture and colour and is only darker: it is road.
+A sample on a row that is uniformly road-like across the whole road (ego lane ± a lane width) is road too
+(pale concrete after dark asphalt, a shadow across the road). Samples inside a known vehicle box are hidden.
+occlusion = hidden / samples.
 """
 
 from __future__ import annotations
 
+import math
+from collections import deque
+from dataclasses import dataclass, replace
+
+import cv2
 import numpy as np
 
-from fearguard.vision.lanes import LaneLine, RoadRegion
+from fearguard.vision.lanes import LaneLine, RoadRegion, default_lines  # noqa: F401  (default_lines: re-exported)
+from fearguard.vision.ridges import clamp
 
 ROW_STEP = 2  # [px] sample every this many rows of the working image
 BAND = 0.02  # [-] of the width: half-width of the band around an expected boundary
-FOREIGN_DEV = 0.5  # [-] relative deviation of the median grey from the road reference that is not road ...
-FOREIGN_DEV_MIN = 45.0  # [grey levels] ... and at least this absolute deviation
+BRIGHTER = 1.45  # [-] a sample this many times brighter than the road is not road (no shadow brightens) ...
+DARKER = 0.25  # [-] ... nor one darker than this share of it (deeper than a daylight shadow) ...
+FOREIGN_DEV_MIN = 30.0  # [grey levels] ... when it differs by at least this much (noise in the dark)
 COLOUR_SAT_MIN = 110  # [0..255] HLS saturation of car paint (yellow paint excluded by hue)
+SAT_DEV = 70  # [0..255] a saturation this far from the road's is a coloured object
+YELLOW_HUE = (14, 40)  # [OpenCV hue 0..180] yellow paint is not car paint
+SMOOTH_SHARE = 0.35  # [-] a patch with less than this share of the road's roughness is a smooth object ...
+SMOOTHER_SHARE = 0.6  # [-] a brighter patch with less than this share of the road's roughness is a pale object
+ROUGH_MIN = 0.004  # [-] ... when the road itself is measurably rough (a rendered road may be flat)
+DIFF_CLIP_PX = 8.0  # [grey levels] roughness counts a neighbour difference up to this (beyond: an edge, not texture)
 ROW_SAMPLES = 15  # [-] points across the road (ego lane ± a lane width) that give a row's road grey
+ROW_UNIFORM = 0.8  # [-] share of a row's points close to its median for the row to count as all road
+ROW_DEV = 0.25  # [-] relative deviation from the row median that still counts as the same surface
 REFERENCE_ROWS = 0.15  # [-] of the region's height: bottom rows whose lane interior gives the road reference
-DEFAULT_HALF_WIDTH = 0.32  # [-] of the width: default lane's half-width at the bottom row (dash-cam, centred)
+PATCH_HALF_PX = 6  # [px] roughness patches are 3 rows × (2·this + 1) columns of the working image
+MODEL_FRAMES = 15  # [frames] the road appearance is the median of this many recent frames ...
+MODEL_CHANGE_FRAMES = 10  # [frames] ... and re-learnt after this many frames in a row unlike it (the road changed)
+MODEL_GREY_RATIO = 1.35  # [-] a frame's road this much brighter or darker than the model is unlike it ...
+MODEL_ROUGH_RATIO = 2.0  # [-] ... as is one this much rougher or smoother
+LEARN_OCCLUSION_MAX = 0.15  # [-] frames with more occlusion than this do not teach the model
 
 
-def default_lines(region: RoadRegion) -> tuple[LaneLine, LaneLine]:
-    """A centred lane meeting at the top of the road region: the prior when nothing is known."""
-    w, top, bottom = region.width_px, region.top_v_px, region.bottom_v_px
-    vp_v = top - 0.04 * region.height_px
-    lines = []
-    for u_bottom in ((0.5 - DEFAULT_HALF_WIDTH) * w, (0.5 + DEFAULT_HALF_WIDTH) * w):
-        slope = (u_bottom - 0.5 * w) / max(1.0, bottom - vp_v)
-        lines.append(LaneLine(slope, u_bottom - slope * bottom, 0.0, 0))
-    return lines[0], lines[1]
+@dataclass(frozen=True)
+class RoadAppearance:
+    """What the road looks like: median grey level, median HLS saturation, median patch roughness (std / mean)."""
+
+    grey: float
+    saturation: float
+    roughness: float
+
+    def like(self, other: RoadAppearance) -> bool:
+        """Same surface (within the model's tolerances)?"""
+        g = max(self.grey, 1.0) / max(other.grey, 1.0)
+        r = max(self.roughness, 1e-4) / max(other.roughness, 1e-4)
+        return 1 / MODEL_GREY_RATIO <= g <= MODEL_GREY_RATIO and 1 / MODEL_ROUGH_RATIO <= r <= MODEL_ROUGH_RATIO
+
+
+class RoadModel:
+    """The road's appearance over recent frames: robust to a single frame's (or a short) occluder.
+
+    A frame's appearance is learnt when the frame's occlusion was low and it looks like the model (or the model is
+    new); after MODEL_CHANGE_FRAMES frames in a row unlike the model, the road itself changed and it is re-learnt."""
+
+    def __init__(self) -> None:
+        self._seen: deque[RoadAppearance] = deque(maxlen=MODEL_FRAMES)
+        self._unlike = 0
+        self.current: RoadAppearance | None = None
+
+    def reset(self) -> None:
+        self.__init__()  # type: ignore[misc]
+
+    def reference(self, measured: RoadAppearance) -> RoadAppearance:
+        """The appearance to judge this frame by: the model, else this frame's own measurement."""
+        return self.current if self.current is not None else measured
+
+    def learn(self, measured: RoadAppearance, occlusion: float) -> None:
+        if self.current is not None and not measured.like(self.current):
+            self._unlike += 1
+            if self._unlike < MODEL_CHANGE_FRAMES:
+                return
+            self._seen.clear()
+        elif not occlusion <= LEARN_OCCLUSION_MAX:
+            return
+        self._unlike = 0
+        self._seen.append(measured)
+        self.current = RoadAppearance(*(float(np.median([getattr(a, f) for a in self._seen])) for f in ("grey", "saturation", "roughness")))
+
+
+@dataclass(frozen=True)
+class SurfaceMaps:
+    """Per-frame maps over the road region's rows (computed once, looked up by every sample): 3 × (2·PATCH_HALF_PX + 1)
+    patch means of grey and saturation, patch roughness, the pixels' hue, and an integral image of the marking pixels.
+
+    Roughness = mean absolute difference of horizontally adjacent pixels, each clipped at DIFF_CLIP_PX, over the mean
+    grey: fine texture counts fully, a single edge through the patch (a shadow's, a marking's) only a little, and the
+    ratio is the same in sun and in shade."""
+
+    top_v_px: int
+    grey: np.ndarray  # float32 patch means
+    saturation: np.ndarray
+    roughness: np.ndarray
+    hue: np.ndarray  # uint8, the pixel's own
+    paint_integral: np.ndarray  # integral image of the marking pixels (0/1) over the band
+
+
+def surface_maps(
+    gray: np.ndarray, hls: np.ndarray, features: np.ndarray, region: RoadRegion, paint_integral: np.ndarray | None = None
+) -> SurfaceMaps:
+    """The maps for a working image; paint_integral: the band's marking-pixel integral when already computed
+    (``LaneDetection.maps``)."""
+    band = slice(region.top_v_px, region.bottom_v_px + 1)
+    g = gray[band].astype(np.float32)
+    k = (2 * PATCH_HALF_PX + 1, 3)
+    grey = cv2.blur(g, k, borderType=cv2.BORDER_REPLICATE)
+    diff = np.minimum(np.abs(np.diff(g, axis=1, append=g[:, -1:])), DIFF_CLIP_PX)
+    rough = cv2.blur(diff, k, borderType=cv2.BORDER_REPLICATE) / np.maximum(grey, 1.0)
+    sat = cv2.blur(hls[band, :, 2].astype(np.float32), k, borderType=cv2.BORDER_REPLICATE)
+    if paint_integral is None:
+        paint_integral = cv2.integral((features[band] > 0).view(np.uint8), sdepth=cv2.CV_64F)
+    return SurfaceMaps(region.top_v_px, grey, sat, rough, hls[band, :, 0], paint_integral)
+
+
+def road_appearance(
+    gray: np.ndarray, hls: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine, maps: SurfaceMaps | None = None
+) -> RoadAppearance:
+    """The lane interior's appearance over the whole road region (medians over patches spread through it: one
+    shadow or patch of concrete does not set it)."""
+    maps = maps if maps is not None else surface_maps(gray, hls, np.zeros_like(gray), region)
+    rows = np.arange(region.top_v_px + 1, region.bottom_v_px, 2 * ROW_STEP)
+    a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    frac = np.linspace(0.2, 0.8, 5)
+    cols = clamp(np.rint(lo[:, None] + frac[None, :] * (hi - lo)[:, None]).astype(np.int64), 0, region.width_px - 1)
+    r = (rows - maps.top_v_px)[:, None]
+    return RoadAppearance(
+        float(np.median(maps.grey[r, cols])), float(np.median(maps.saturation[r, cols])), float(np.median(maps.roughness[r, cols]))
+    )
 
 
 def road_reference(gray: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine) -> float:
@@ -52,21 +162,26 @@ def road_reference(gray: np.ndarray, region: RoadRegion, left: LaneLine, right: 
     return float(np.median(np.concatenate(values)))
 
 
-def row_references(gray: np.ndarray, region: RoadRegion, rows: np.ndarray, interior: tuple[LaneLine, LaneLine]) -> np.ndarray:
-    """Median grey across the road on each row: the ego lane and a lane width either side (in the image only),
-    so one vehicle covering the ego lane or a neighbour cannot become the row's idea of road."""
+def row_references(
+    gray: np.ndarray, region: RoadRegion, rows: np.ndarray, interior: tuple[LaneLine, LaneLine]
+) -> tuple[np.ndarray, np.ndarray]:
+    """Median grey across the road on each row — the ego lane and a lane width either side (in the image only) —
+    and whether the row is uniform (ROW_UNIFORM of its points close to that median: one surface across the road,
+    not a vehicle or a box covering part of it)."""
     a, b = interior[0].u_at(rows.astype(float)), interior[1].u_at(rows.astype(float))
     frac = np.linspace(-0.9, 1.9, ROW_SAMPLES)
     cols = np.rint(a[:, None] + frac[None, :] * (b - a)[:, None])
     inside = (cols >= 0) & (cols < region.width_px)
-    values = gray[rows[:, None], np.clip(cols, 0, region.width_px - 1).astype(np.int64)].astype(float)
+    values = gray[rows[:, None], clamp(cols, 0, region.width_px - 1).astype(np.int64)].astype(float)
     # median of the in-image samples per row (np.nanmedian goes through masked arrays: 10× slower here)
     ordered = np.sort(np.where(inside, values, np.inf), axis=1)
     n = inside.sum(axis=1)
     lo = np.maximum(n - 1, 0) // 2
     r = np.arange(len(rows))
     med = 0.5 * (ordered[r, lo] + ordered[r, np.where(n % 2 == 0, n // 2, lo)])
-    return np.where(n > 0, med, np.nan)
+    med = np.where(n > 0, med, np.nan)
+    close = inside & (np.abs(values - med[:, None]) <= np.maximum(FOREIGN_DEV_MIN, ROW_DEV * med)[:, None])
+    return med, close.sum(axis=1) >= ROW_UNIFORM * np.maximum(n, 1)
 
 
 def sample_rows(region: RoadRegion) -> np.ndarray:
@@ -75,44 +190,54 @@ def sample_rows(region: RoadRegion) -> np.ndarray:
 
 
 def hidden_samples(
-    gray: np.ndarray, hls: np.ndarray, features: np.ndarray, region: RoadRegion, line: LaneLine, reference: float,
-    row_ref: np.ndarray, boxes: tuple[tuple[int, int, int, int], ...] = (),
+    maps: SurfaceMaps, region: RoadRegion, line: LaneLine, road: RoadAppearance, row_ref: tuple[np.ndarray, np.ndarray],
+    boxes: tuple[tuple[int, int, int, int], ...] = (),
 ) -> tuple[int, int]:
     """(hidden, total) samples along one expected boundary (vectorised over rows); row_ref: row_references on sample_rows."""
     half = max(2, int(BAND * region.width_px))
     rows = sample_rows(region)
     centre = np.rint(line.u_at(rows.astype(float))).astype(np.int64) if len(rows) else rows
-    offsets = np.arange(-half, half + 1)
-    cols = centre[:, None] + offsets[None, :]
-    inside = (cols >= 0) & (cols < region.width_px)
-    seen = inside.any(axis=1)  # rows where the band is in the image at all
+    lo, hi = clamp(centre - half, 0, region.width_px), clamp(centre + half + 1, 0, region.width_px)
+    seen = hi > lo  # rows where the band is in the image at all
     if not seen.any():
         return 0, 0
-    rows, cols, inside, row_ref = rows[seen], cols[seen], inside[seen], row_ref[seen]
-    clipped = np.clip(cols, 0, region.width_px - 1)  # a band running off the image repeats its edge pixel
-    r = rows[:, None]
-    paint = (features[r, clipped] > 0) & inside
-    dev = max(FOREIGN_DEV_MIN, FOREIGN_DEV * reference)
-    grey = np.median(gray[r, clipped], axis=1)
-    row_dev = np.maximum(FOREIGN_DEV_MIN, FOREIGN_DEV * row_ref)
-    foreign = (np.abs(grey - reference) > dev) & (np.abs(grey - row_ref) > row_dev)
-    sat = np.median(hls[r, clipped, 2], axis=1)
-    med_hue = np.median(hls[r, clipped, 0], axis=1)
-    foreign |= (sat >= COLOUR_SAT_MIN) & ~((med_hue >= 14) & (med_hue <= 40))
-    hidden = foreign & ~paint.any(axis=1)
-    u = centre[seen]
+    rows, centre, lo, hi = rows[seen], centre[seen], lo[seen], hi[seen]
+    row_grey, row_uniform = row_ref[0][seen], row_ref[1][seen]
+    r = rows - maps.top_v_px
+    u = clamp(centre, 0, region.width_px - 1)  # a band running off the image is judged at its edge pixel
+    pi = maps.paint_integral
+    paint = (pi[r + 1, hi] - pi[r + 1, lo] - pi[r, hi] + pi[r, lo]) > 0
+    grey, rough, sat, hue = maps.grey[r, u], maps.roughness[r, u], maps.saturation[r, u], maps.hue[r, u]
+    ref = max(road.grey, 1.0)
+    off_grey = np.abs(grey - ref) >= FOREIGN_DEV_MIN
+    textured = road.roughness >= ROUGH_MIN
+    smooth = (rough < SMOOTH_SHARE * road.roughness) if textured else np.zeros(len(rows), bool)
+    smoother = (rough < SMOOTHER_SHARE * road.roughness) if textured else np.ones(len(rows), bool)
+    # brighter than the road *and* smoother (a white or silver body; sunlit concrete keeps its texture), or darker than
+    # any shadow (a black body, a tyre)
+    foreign = off_grey & (((grey > BRIGHTER * ref) & smoother) | (grey < DARKER * ref))
+    coloured = (sat >= COLOUR_SAT_MIN) | (np.abs(sat - road.saturation) >= SAT_DEV)
+    coloured &= ~((hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]))
+    row_road = row_uniform & (np.abs(grey - row_grey) <= np.maximum(FOREIGN_DEV_MIN, ROW_DEV * row_grey)) & ~smooth
+    hidden = ((foreign & ~row_road) | coloured | smooth) & ~paint
     for x, y, w, h in boxes:
-        hidden |= (u >= x) & (u < x + w) & (rows >= y) & (rows < y + h)
+        hidden |= (centre >= x) & (centre < x + w) & (rows >= y) & (rows < y + h)
     return int(hidden.sum()), len(rows)
 
 
 def occlusion(
     gray: np.ndarray, hls: np.ndarray, features: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine,
-    reference: float, boxes: tuple[tuple[int, int, int, int], ...] = (),
+    road: RoadAppearance | float, boxes: tuple[tuple[int, int, int, int], ...] = (), maps: SurfaceMaps | None = None,
 ) -> float:
-    """Occlusion 0..1 over both expected boundaries (1 when no boundary is in view at all)."""
+    """Occlusion 0..1 over both expected boundaries (1 when no boundary is in view at all). road: the road's
+    appearance (``road_appearance`` or ``RoadModel``); a bare grey level (the road reference) is accepted too.
+    maps: this frame's ``surface_maps`` (computed here when not given)."""
+    maps = maps if maps is not None else surface_maps(gray, hls, features, region)
+    if not isinstance(road, RoadAppearance):
+        measured = road_appearance(gray, hls, region, left, right, maps)
+        road = replace(measured, grey=float(road)) if math.isfinite(road) else measured
     row_ref = row_references(gray, region, sample_rows(region), (left, right))  # the same rows for both boundaries
-    h_l, n_l = hidden_samples(gray, hls, features, region, left, reference, row_ref, boxes)
-    h_r, n_r = hidden_samples(gray, hls, features, region, right, reference, row_ref, boxes)
+    h_l, n_l = hidden_samples(maps, region, left, road, row_ref, boxes)
+    h_r, n_r = hidden_samples(maps, region, right, road, row_ref, boxes)
     n = n_l + n_r
     return float((h_l + h_r) / n) if n else 1.0

@@ -1,7 +1,7 @@
 """What the stateful frame analysis remembers between frames, and the pass-through stand-ins of the stateless form.
 
 ``FramePipeline`` holds ``Trackers.tracking()``: the lane boundaries' Kalman tracks, the lead box's
-track, the steering's lane memory and the median of the last confidences. ``analyze_frame`` runs the
+track, the steering's lane memory, the median of the last confidences and the road's appearance. ``analyze_frame`` runs the
 very same stages with ``Trackers.pass_through()``: each stand-in hands this frame's measurement back
 unchanged and remembers nothing. So the two forms differ only in what they remember, and a pipeline
 built with pass-through trackers must agree with ``analyze_frame`` on every frame (tested, as
@@ -20,6 +20,7 @@ from fearguard.observation import LeadBox
 from fearguard.vision.lane_tracker import LaneTracker, TrackedLanes
 from fearguard.vision.lanes import LaneLine, RoadRegion
 from fearguard.vision.lead import LeadTracker
+from fearguard.vision.occlusion import RoadAppearance, RoadModel
 from fearguard.vision.steering import DEFAULT_LANE_WIDTH, LaneMemory
 
 CONFIDENCE_MEDIAN_FRAMES = 3  # [frames] lane_confidence over time is the median of this many frames (50 ms lag at 20 Hz)
@@ -43,6 +44,12 @@ class SteeringMemory(Protocol):
 
 class ConfidenceSmoothing(Protocol):
     def update(self, confidence: float) -> float: ...
+
+
+class RoadMemory(Protocol):
+    def reference(self, measured: RoadAppearance) -> RoadAppearance: ...
+
+    def learn(self, measured: RoadAppearance, occlusion: float) -> None: ...
 
 
 class ConfidenceMedian:
@@ -91,21 +98,35 @@ class PassThroughConfidence:
         return confidence
 
 
+class PassThroughRoad:
+    """No road appearance model: this frame's lane interior is the road."""
+
+    def reference(self, measured: RoadAppearance) -> RoadAppearance:
+        return measured
+
+    def learn(self, measured: RoadAppearance, occlusion: float) -> None:
+        return None
+
+
 @dataclass(frozen=True)
 class Trackers:
-    """The four memories of the frame analysis (each replaced, never reset in place, on a pipeline reset)."""
+    """The memories of the frame analysis (each replaced, never reset in place, on a pipeline reset)."""
 
     lanes: LaneTracking
     leads: LeadTracking
     memory: SteeringMemory
     confidence: ConfidenceSmoothing
+    road: RoadMemory  # the road's appearance over recent frames (occlusion's reference)
 
     @classmethod
     def tracking(cls) -> Trackers:
         """The stateful form's: Kalman tracks, lane memory, confidence median."""
-        return cls(lanes=LaneTracker(), leads=LeadTracker(), memory=LaneMemory(), confidence=ConfidenceMedian())
+        return cls(lanes=LaneTracker(), leads=LeadTracker(), memory=LaneMemory(), confidence=ConfidenceMedian(), road=RoadModel())
 
     @classmethod
     def pass_through(cls) -> Trackers:
         """The stateless form's: every stand-in hands this frame's measurement back and remembers nothing."""
-        return cls(lanes=PassThroughLanes(), leads=PassThroughLead(), memory=PassThroughMemory(), confidence=PassThroughConfidence())
+        return cls(
+            lanes=PassThroughLanes(), leads=PassThroughLead(), memory=PassThroughMemory(), confidence=PassThroughConfidence(),
+            road=PassThroughRoad(),
+        )

@@ -1,0 +1,164 @@
+"""Is there a painted marking along a candidate boundary? Row by row: a ridge of plausible width with road beside it.
+
+A lane marking, on every image row it crosses, is a *ridge*: a run of marking pixels (``lanes.marking_features``)
+bounded by two edges (rising, then falling), as wide as paint can be at that distance — a share of the lane width
+at that row (``WIDTH_RANGE``) — with plain road on both sides: its flanks hold no marking pixels, are darker than
+the paint by a ratio (``CONTRAST_RATIO``: the same in sun and in shade) and are smooth compared with that contrast.
+Noise, random texture, chessboards and the bright gaps between tree shadows fail at least one of these on most
+rows, real paint passes on most rows it covers. The share of rows that pass is the boundary's *support*; the run's
+edge nearest the lane centre is the boundary's position on that row (``inner_u``), so the lane width does not
+jump between the inner and the outer edge of wide tape.
+
+Written by hand (vectorised over rows, O(rows) per scan from per-frame cumulative sums): OpenCV has no
+ridge-with-flanks test, and it is a few array operations.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+WIDTH_RANGE = (0.012, 0.12)  # [-] of the lane width at the row: narrowest and widest paint (road lanes: 10-30 cm of 3-3.7 m)
+MIN_WIDTH_PX = 1.0  # [px] a ridge is at least this wide (far rows)
+SEARCH = 0.03  # [-] of the image width: the run must reach within this of the candidate line
+CONTRAST_RATIO = 1.12  # [-] paint is at least this many times brighter than its flanks (illumination invariant)
+CONTRAST_MIN = 6.0  # [grey levels] ... and at least this much brighter (sensor noise)
+FLANK_PAINT_MAX = 0.25  # [-] share of marking pixels a flank may hold (the road beside paint is plain)
+FLANK_ROUGHNESS = 0.45  # [-] flank standard deviation may be at most this share of the paint's contrast
+FLANK_GAP_PX = 1  # [px] between the run's edge and its flank (the edge pixel itself is blurred)
+MIN_RUN_ROWS = 3  # [rows] paint spans consecutive rows (a dash many): ridges on isolated rows are texture, not paint
+SUPPORT_FULL = 0.35  # [-] covering this share of the rows counts as full support (a dashed line covers about this)
+
+
+@dataclass(frozen=True)
+class RidgeScan:
+    """Per-row result of scanning along one candidate boundary."""
+
+    rows: np.ndarray  # [px] image rows scanned
+    ok: np.ndarray  # bool per row: a marking-like ridge was found there
+    inner_u: np.ndarray  # [px] the ridge edge nearest the lane centre (NaN where not ok)
+    support: float  # [0..1] share of rows ok, saturating at SUPPORT_FULL
+
+
+@dataclass(frozen=True)
+class RidgeMaps:
+    """Per-frame tables that make every scan O(rows · log width): one stack of integral images (cv2.integral2) — the
+    marking mask, then each channel and its square — and, to find the run of marking pixels through a pixel by
+    binary search, the row-wise count of non-marking pixels left of each column, offset by row so it is sorted."""
+
+    top_v_px: int
+    feat: np.ndarray  # bool, rows top.. of the band
+    integrals: np.ndarray  # (1 + 2·channels, rows + 1, width + 1) float64
+    gaps_key: np.ndarray  # flat (rows · (width + 1)): non-marking pixels in [0, u) of row r, + r · (width + 1)
+
+    @property
+    def paint_integral(self) -> np.ndarray:
+        """Integral image of the marking mask (0/1) over the band."""
+        return self.integrals[0]
+
+    def runs(self, r: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """First and last column of the run of marking pixels through (band row r, column u) — u a marking pixel."""
+        stride = self.feat.shape[1] + 1
+        base = r * stride
+        k = self.gaps_key[base + u]  # non-marking pixels left of u, + base
+        start = np.searchsorted(self.gaps_key, k, "left") - base  # just after the last gap left of u
+        end = np.searchsorted(self.gaps_key, k + 1, "left") - base - 2  # just before the first gap right of u
+        return start, end
+
+
+def ridge_maps(channels: tuple[np.ndarray, ...], features: np.ndarray, top_v_px: int, bottom_v_px: int) -> RidgeMaps:
+    """The tables for the rows top..bottom of full-size channels (lightness, saturation) and marking mask."""
+    band = slice(top_v_px, bottom_v_px + 1)
+    feat = features[band] > 0
+    h, w = feat.shape
+    integrals = np.empty((1 + 2 * len(channels), h + 1, w + 1), np.float64)
+    integrals[0] = cv2.integral(feat.view(np.uint8), sdepth=cv2.CV_64F)
+    for i, c in enumerate(channels):
+        integrals[1 + 2 * i], integrals[2 + 2 * i] = cv2.integral2(np.ascontiguousarray(c[band]), sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
+    row_paint = integrals[0, 1:] - integrals[0, :-1]  # marking pixels in [0, u) of each row
+    gaps = np.arange(w + 1)[None, :] - row_paint + (np.arange(h) * (w + 1))[:, None]
+    return RidgeMaps(top_v_px, feat, integrals, gaps.ravel())
+
+
+def _span_sums(integrals: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Sums over columns [lo, hi) of band rows r (lo, hi: (spans, rows)), for every layer: (layers, spans, rows).
+    One flat ``take`` for all corners of all spans (fancy indexing per corner costs more than the arithmetic)."""
+    stride = integrals.shape[2]
+    top, bottom = r * stride, (r + 1) * stride
+    idx = np.stack([bottom + hi, bottom + lo, top + hi, top + lo])
+    c = np.take(integrals.reshape(integrals.shape[0], -1), idx, axis=1)
+    return c[:, 0] - c[:, 1] - c[:, 2] + c[:, 3]
+
+
+def scan_ridges(
+    maps: RidgeMaps, rows: np.ndarray, centre_u: np.ndarray, lane_width_px: np.ndarray, inner_is_left: bool,
+    width_range: tuple[float, float] = WIDTH_RANGE,
+) -> RidgeScan:
+    """Scan rows (ints, inside the maps' band) around the columns centre_u (float per row) for a marking ridge.
+
+    maps: ``ridge_maps`` of the (smoothed) lightness and the saturation (yellow paint on pale concrete is no lighter
+    than the concrete, only more saturated: a ridge must stand out in one of them) and of the marking pixels;
+    lane_width_px: the lane width on each row (from the tracked boundaries or a prior); inner_is_left: True for a
+    right boundary (its inner edge is the run's left edge); width_range: paint width as a share of the lane width.
+    """
+    n = len(rows)
+    if n == 0:
+        return RidgeScan(rows, np.zeros(0, bool), np.zeros(0), 0.0)
+    w = maps.feat.shape[1]
+    lw = np.maximum(lane_width_px, 4.0)
+    search = max(2, int(SEARCH * w))
+    offsets = np.arange(-search, search + 1)
+    cols = np.rint(centre_u).astype(np.int64)[:, None] + offsets[None, :]
+    rr = rows - maps.top_v_px
+    cc = clamp(cols, 0, w - 1)
+    near = maps.feat[rr[:, None], cc] & (cols == cc)
+    # the run of marking pixels nearest the candidate column (within the search distance)
+    j0 = np.argmin(np.where(near, np.abs(offsets)[None, :], 10**6), axis=1)
+    pick = np.arange(n)
+    found = near[pick, j0]
+    u0 = cc[pick, j0]
+    a, b = maps.runs(rr, u0)
+    width = b - a + 1
+    ok = found & (width >= np.maximum(MIN_WIDTH_PX, width_range[0] * lw)) & (width <= np.maximum(3.0, width_range[1] * lw))
+    fw = np.maximum(2, width)
+    lo = clamp(np.stack([a, a - FLANK_GAP_PX - fw, b + FLANK_GAP_PX + 1]), 0, w)  # spans: run, left flank, right flank
+    hi = clamp(np.stack([b + 1, a - FLANK_GAP_PX, b + FLANK_GAP_PX + 1 + fw]), 0, w)
+    count = hi - lo
+    means = _span_sums(maps.integrals, rr, lo, hi) / np.maximum(count, 1)
+    paint = means[1::2, 0]  # each channel's mean over the run
+    stands_out = np.ones((len(paint), n), bool)
+    for f in (1, 2):  # the flanks
+        plain = means[0, f] <= FLANK_PAINT_MAX  # the road beside paint holds (almost) no paint
+        mean, sq = means[1::2, f], means[2::2, f]
+        std = np.sqrt(np.maximum(sq - mean * mean, 0.0))
+        contrast = paint - mean
+        passes = (paint >= CONTRAST_RATIO * mean) & (contrast >= CONTRAST_MIN) & (std <= FLANK_ROUGHNESS * contrast) & plain
+        stands_out &= passes | (count[f] == 0)  # a flank outside the image says nothing (lines leaving sideways)
+    ok &= (count[1] + count[2] > 0) & stands_out.any(axis=0)
+    ok = _in_long_runs(ok, MIN_RUN_ROWS)
+    inner = np.where(ok, a if inner_is_left else b, np.nan).astype(np.float64)
+    support = float(min(1.0, ok.mean() / SUPPORT_FULL))
+    return RidgeScan(rows, ok, inner, support)
+
+
+def clamp(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """np.clip for index arrays, without its per-call dtype-limit lookups (measurably slower on small arrays)."""
+    return np.minimum(np.maximum(x, lo), hi)
+
+
+
+
+def _in_long_runs(ok: np.ndarray, min_rows: int) -> np.ndarray:
+    """ok, keeping only runs of at least min_rows consecutive True rows."""
+    if min_rows <= 1 or len(ok) == 0:
+        return ok
+    padded = np.concatenate([[False], ok, [False]]).astype(np.int8)
+    change = np.diff(padded)
+    starts, ends = np.flatnonzero(change == 1), np.flatnonzero(change == -1)
+    keep = np.zeros(len(ok), bool)
+    for lo, hi in zip(starts, ends, strict=True):
+        if hi - lo >= min_rows:
+            keep[lo:hi] = True
+    return keep
