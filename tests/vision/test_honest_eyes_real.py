@@ -12,10 +12,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from tests.perturb import OCCLUDER_BOXES, OCCLUDER_COLOURS, garbage_frames, not_frozen, with_box
 
 import fearguard as fg
-
-from tests.perturb import OCCLUDER_BOXES, OCCLUDER_COLOURS, garbage_frames, not_frozen, with_box
 
 WARM_FRAMES = 5
 OCCLUDED_FRAMES = 3
@@ -54,7 +53,7 @@ def test_clean_stills_are_seen_clearly(warmed, stills):
     """Occlusion ≤ 0.05 and confidence ≥ 0.6 on every still; tracked, ≥ 0.6 on 12 of 14 and ≥ 0.45 on all (test1:
     a faint dashed line on pale concrete; test4: shadow edges beside the yellow line on pale concrete)."""
     tracked_clear = 0
-    for name, (_guard_, cmd) in warmed.items():
+    for name, (_, cmd) in warmed.items():
         still = fg.analyze_frame(stills[name])
         assert cmd.cues.occlusion <= 0.05 and still.occlusion <= 0.05, name
         assert still.lane_confidence >= 0.6, name
