@@ -50,8 +50,9 @@ def test_inverted_consequent_is_reported_non_monotone(write_rules) -> None:
 
 
 def test_brightness_rising_into_the_band_must_not_raise_fear(write_rules) -> None:
-    path = write_rules(('"IF brightness IS dim OR brightness IS bright THEN fear IS medium"',
-                        '"IF brightness IS bright THEN fear IS medium", "IF brightness IS dim THEN fear IS very_low"'))
+    # dim and normal as two rules (max, not one trapezoid): their crossing dips, so fear rises entering the band
+    path = write_rules(('"IF brightness IS usable THEN fear IS very_low"',
+                        '"IF brightness IS normal THEN fear IS very_low", "IF brightness IS dim THEN fear IS very_low"'))
     report = check_rules(fg.load_rules(path))
     assert [g.group for g in report.groups if g.violations] == ["visibility"]
 
