@@ -22,6 +22,7 @@ import numpy as np
 
 WIDTH_RANGE = (0.012, 0.12)  # [-] of the lane width at the row: narrowest and widest paint (road lanes: 10-30 cm of 3-3.7 m)
 MIN_WIDTH_PX = 1.0  # [px] a ridge is at least this wide (far rows)
+MAX_WIDTH_FLOOR = 0.02  # [-] of the image width: a ridge this wide is always plausible (far paint, blurred; a lane-width prior that is off)
 SEARCH = 0.03  # [-] of the image width: the run must reach within this of the candidate line
 CONTRAST_RATIO = 1.12  # [-] paint is at least this many times brighter than its flanks (illumination invariant)
 CONTRAST_MIN = 6.0  # [grey levels] ... and at least this much brighter (sensor noise)
@@ -121,7 +122,7 @@ def scan_ridges(
     u0 = cc[pick, j0]
     a, b = maps.runs(rr, u0)
     width = b - a + 1
-    ok = found & (width >= np.maximum(MIN_WIDTH_PX, width_range[0] * lw)) & (width <= np.maximum(3.0, width_range[1] * lw))
+    ok = found & (width >= np.maximum(MIN_WIDTH_PX, width_range[0] * lw)) & (width <= np.maximum(MAX_WIDTH_FLOOR * w, width_range[1] * lw))
     fw = np.maximum(2, width)
     lo = clamp(np.stack([a, a - FLANK_GAP_PX - fw, b + FLANK_GAP_PX + 1]), 0, w)  # spans: run, left flank, right flank
     hi = clamp(np.stack([b + 1, a - FLANK_GAP_PX, b + FLANK_GAP_PX + 1 + fw]), 0, w)
