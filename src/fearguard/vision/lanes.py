@@ -14,6 +14,7 @@ are steep in the image.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass, replace
 
 import cv2
@@ -232,14 +233,14 @@ def split_by_slope(segments: np.ndarray, width_px: int) -> tuple[np.ndarray, np.
 
 def fit_line(segments: np.ndarray, region: RoadRegion, prior: LaneLine | None = None) -> tuple[float, float] | None:
     """The preferred boundary among one side's segments (the first of ``candidate_fits``), or None."""
-    fits = candidate_fits(segments, region, prior, 1)
-    return fits[0] if fits else None
+    return next(candidate_fits(segments, region, prior, 1), None)
 
 
 def candidate_fits(
     segments: np.ndarray, region: RoadRegion, prior: LaneLine | None = None, count: int = CANDIDATES
-) -> list[tuple[float, float]]:
-    """Up to ``count`` distinct boundary lines among one side's segments, preferred first.
+) -> Iterator[tuple[float, float]]:
+    """Up to ``count`` distinct boundary lines among one side's segments, preferred first (lazily: the caller stops
+    when the first is good enough).
 
     RANSAC over segment hypotheses; hypotheses with RANSAC_KEEP of the best support compete, ordered by distance to
     the prior — last frame's tracked boundary — else innermost first (the ego lane's boundary is the marking nearest
@@ -247,12 +248,12 @@ def candidate_fits(
     picks among them by marking evidence (``ridge_line``); the prior keeps a curved boundary, which two straight
     lines fit about equally, from flipping."""
     if len(segments) == 0:
-        return []
+        return
     w = region.width_px
     dv = segments[:, 3] - segments[:, 1]
     seg = segments[np.abs(dv) > 1e-9]
     if len(seg) == 0:
-        return []
+        return
     if len(seg) > RANSAC_MAX_SEGMENTS:  # hypotheses and voters: the longest segments (bounds the O(n²) cost)
         seg = seg[np.argsort(-np.hypot(seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]))[:RANSAC_MAX_SEGMENTS]]
     slope = (seg[:, 2] - seg[:, 0]) / (seg[:, 3] - seg[:, 1])
@@ -273,17 +274,19 @@ def candidate_fits(
         order_key = np.abs(slope[:, None] * rows[None, :] + icpt[:, None] - prior.u_at(rows)[None, :]).mean(axis=1)
     else:
         order_key = off_centre
-    fits: list[tuple[float, float]] = []
     taken = np.zeros(len(seg), bool)
+    given = 0
     for best in np.flatnonzero(candidates)[np.argsort(order_key[candidates])]:
-        if taken[best] or len(fits) >= count:
+        if taken[best]:
             continue  # a hypothesis already explained by a preferred line is the same line
+        if given >= count:
+            return
         taken |= inlier[best]
         chosen = seg[inlier[best]]
         v = np.concatenate([chosen[:, 1], chosen[:, 3]])
         u = np.concatenate([chosen[:, 0], chosen[:, 2]])
-        fits.append(_weighted_fit(v, u, np.tile(length[inlier[best]], 2)) or (float(slope[best]), float(icpt[best])))
-    return fits
+        given += 1
+        yield _weighted_fit(v, u, np.tile(length[inlier[best]], 2)) or (float(slope[best]), float(icpt[best]))
 
 
 def _weighted_fit(v: np.ndarray, u: np.ndarray, w: np.ndarray) -> tuple[float, float] | None:

@@ -93,7 +93,8 @@ class RoadModel:
             return
         self._unlike = 0
         self._seen.append(measured)
-        self.current = RoadAppearance(*(float(np.median([getattr(a, f) for a in self._seen])) for f in ("grey", "saturation", "roughness")))
+        grey, sat, rough = np.median(np.array([(a.grey, a.saturation, a.roughness) for a in self._seen]), axis=0)
+        self.current = RoadAppearance(float(grey), float(sat), float(rough))
 
 
 @dataclass(frozen=True)
@@ -142,9 +143,8 @@ def road_appearance(
     frac = np.linspace(0.2, 0.8, 5)
     cols = clamp(np.rint(lo[:, None] + frac[None, :] * (hi - lo)[:, None]).astype(np.int64), 0, region.width_px - 1)
     r = (rows - maps.top_v_px)[:, None]
-    return RoadAppearance(
-        float(np.median(maps.grey[r, cols])), float(np.median(maps.saturation[r, cols])), float(np.median(maps.roughness[r, cols]))
-    )
+    grey, sat, rough = np.median(np.stack([maps.grey[r, cols], maps.saturation[r, cols], maps.roughness[r, cols]]).reshape(3, -1), axis=1)
+    return RoadAppearance(float(grey), float(sat), float(rough))
 
 
 def road_reference(gray: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine) -> float:
