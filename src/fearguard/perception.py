@@ -24,6 +24,7 @@ from fearguard.sensors.localisation import LocalisationState, QrLocaliser
 from fearguard.sensors.ultrasonic import RangeEstimate, UltrasonicFilter
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.frame import FrameAnalysis, FramePipeline, invalid_frame_reason
+from fearguard.vision.obstacle import Obstacle
 
 FROZEN_FRAMES = 3  # [frames] identical frames in a row that mean the camera froze (real sensors always have noise)
 ULTRASONIC_CONE_DEG = 15.0  # [deg] a lead within ±half this bearing is what the ultrasonic sees
@@ -106,7 +107,7 @@ class Perception:
         analysis = self._vision(obs.frame, t, box, reasons, facts)
         seen = analysis if analysis is not None else _UNSEEN
         t1 = clock()
-        range_m, estimate = self._range(obs, t, reasons, facts)
+        range_m, estimate = self._range(obs, t, reasons, facts, seen.obstacle)
         t2 = clock()
         staleness, loc = self._staleness(obs, t, seen.qr_payloads, facts)
         t3 = clock()
@@ -160,9 +161,14 @@ class Perception:
         return self._same_frames >= FROZEN_FRAMES
 
     # -- ultrasonic -----------------------------------------------------------------------------
-    def _range(self, obs: Observation, t: float, reasons: list[str], facts: list[str]) -> tuple[float, RangeEstimate | None]:
-        if not self.vehicle.has_ultrasonic:
-            return math.inf, None  # no sensor: nothing known in range, declared not faked
+    def _range(
+        self, obs: Observation, t: float, reasons: list[str], facts: list[str], seen: Obstacle | None = None
+    ) -> tuple[float, RangeEstimate | None]:
+        if not self.vehicle.has_ultrasonic:  # no range sensor: the camera's ground-plane range of an object in the lane
+            if seen is not None and seen.range_m is not None:
+                facts.append(f"camera: object in the lane at {seen.range_m:.2f} m (ground plane, bearing {seen.bearing_deg:+.1f}°)")
+                return seen.range_m, None
+            return math.inf, None  # nothing seen in range, declared not faked
         est = self.ultrasonic.update(t, obs.ultrasonic_range_m, obs.ultrasonic_echo_s)
         if math.isfinite(est.range_m):
             ttc = f", TTC {est.ttc_s:.1f} s" if math.isfinite(est.ttc_s) else ""

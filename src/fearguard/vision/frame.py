@@ -30,6 +30,7 @@ from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
 from fearguard.vision.exposure import Exposure, road_exposure
 from fearguard.vision.lanes import LaneLine, RoadRegion, detect_lanes, region_mask, road_region, work_size
 from fearguard.vision.lead import detect_lead, lead_from_box
+from fearguard.vision.obstacle import Obstacle, detect_obstacle
 from fearguard.vision.occlusion import default_lines, occlusion, road_appearance, road_reference, surface_maps
 from fearguard.vision.qr import detect_qr
 from fearguard.vision.steering import aim_point_u, lookahead_row, steering_from_aim
@@ -62,6 +63,7 @@ class FrameAnalysis:
     road_reference: float = _NAN  # grey level of the road just ahead
     reasons: tuple[str, ...] = ()
     timings_ms: Mapping[str, float] = field(default_factory=dict)
+    obstacle: Obstacle | None = None  # anything standing in the ego lane, with its ground-plane range (vision/obstacle.py)
 
 
 def invalid_frame_reason(frame: object) -> str | None:
@@ -172,6 +174,7 @@ class LeadAndOcclusion:
     lead: Lead | None
     occlusion: float
     road_reference: float  # grey level of the road just ahead
+    obstacle: Obstacle | None = None  # anything standing in the ego lane (needs the camera's mounting height)
 
 
 def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
@@ -224,10 +227,14 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     boxes = (box.scaled(1.0 / p.scale).as_int(),) if box is not None else ()
     surface = surface_maps(p.gray, p.hls, lanes.features, p.region)
     measured = road_appearance(p.gray, p.hls, p.region, expected_l, expected_r, surface)
-    occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, trackers.road.reference(measured), boxes, surface)
+    road = trackers.road.reference(measured)
+    occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface)
     trackers.road.learn(measured, occ)
+    obstacle = None
+    if p.camera.mount_height_m is not None:  # a range needs the mounting height; without it the search is skipped
+        obstacle = detect_obstacle(surface, road, p.region, expected_l, expected_r, p.camera, p.scale)
     lead = lead_from_box(box, p.camera) if box is not None else None
-    return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference)
+    return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference, obstacle=obstacle)
 
 
 def judge_confidence(p: Prepared, lanes: Lanes, occlusion_share: float) -> LaneEvidence:
@@ -276,7 +283,7 @@ def _analyze(
         lane_confidence=confidence, brightness=p.exposure.brightness, occlusion=seen.occlusion, lead=seen.lead,
         qr_payloads=payloads, steering_deg=steering, exposure=p.exposure, evidence=evidence, left=lanes.left,
         right=lanes.right, region=p.region, scale=p.scale, lead_box=seen.box, road_reference=seen.road_reference,
-        reasons=reasons, timings_ms=timings,
+        reasons=reasons, timings_ms=timings, obstacle=seen.obstacle,
     )
 
 

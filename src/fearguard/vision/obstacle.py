@@ -1,0 +1,101 @@
+"""Anything standing in the ego lane, seen by the camera: a toy duck, a cone, a box, a car — and its ground-plane range.
+
+Inside the lane interior (the expected boundaries, inset by ``INSET`` of the lane width, so the lane's own paint is not
+in it) a pixel is *foreign* when its 3-row patch (``occlusion.SurfaceMaps``) does not look like the road
+(``occlusion.RoadAppearance``, the model of recent frames): strongly coloured or of another saturation (any hue — paint
+is not inside the lane), darker than any shadow, brighter and smoother, or smooth where the road is rough. A row whose
+foreign pixels cover ``MIN_SHARE`` of the interior width is an object row; the nearest stretch of ``MIN_ROWS`` such rows
+is the object, standing on its lowest row. Its range is the flat-ground range of that row,
+D = H / tan(α + arctan((v − v0) / f_y)) (``CameraModel.ground_range_m``), so it needs the camera's mounting height.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from fearguard.camera import CameraModel
+from fearguard.vision.lanes import LaneLine, RoadRegion
+from fearguard.vision.occlusion import (
+    BRIGHTER,
+    COLOUR_SAT_MIN,
+    DARKER,
+    FOREIGN_DEV_MIN,
+    ROUGH_MIN,
+    SAT_DEV,
+    SMOOTH_SHARE,
+    SMOOTHER_SHARE,
+    RoadAppearance,
+    SurfaceMaps,
+)
+
+INSET = 0.15  # [-] of the lane width on each side: the interior searched (the boundaries' paint stays out)
+MIN_SHARE = 0.2  # [-] of the interior width: foreign pixels on a row that make it an object row ...
+MIN_PX = 3  # [px] ... and at least this many
+SHADE_SAT_GATE = 0.6  # [-] of the road's grey: darker patches are not judged by their saturation
+MIN_ROWS = 4  # [rows] consecutive object rows that make an object (one row is noise)
+
+
+@dataclass(frozen=True)
+class Obstacle:
+    """An object in the ego lane: its columns and the row it stands on (frame pixels), bearing and range."""
+
+    u_left_px: float
+    u_right_px: float
+    v_bottom_px: float
+    bearing_deg: float
+    range_m: float | None  # None without the camera's mounting height
+
+
+def foreign_mask(maps: SurfaceMaps, road: RoadAppearance) -> np.ndarray:
+    """bool over the maps' band: patches that do not look like the road (any colour, any size)."""
+    grey, sat, rough = maps.grey, maps.saturation, maps.roughness
+    ref = max(road.grey, 1.0)
+    off = np.abs(grey - ref) >= FOREIGN_DEV_MIN
+    lit = grey >= SHADE_SAT_GATE * ref  # HLS saturation of dark pixels is unstable: a shadow is no coloured object
+    coloured = lit & ((sat >= COLOUR_SAT_MIN) | (np.abs(sat - road.saturation) >= SAT_DEV))
+    foreign = coloured | (off & (grey < DARKER * ref))
+    if road.roughness >= ROUGH_MIN:
+        foreign |= rough < SMOOTH_SHARE * road.roughness
+        foreign |= off & (grey > BRIGHTER * ref) & (rough < SMOOTHER_SHARE * road.roughness)
+    return foreign
+
+
+def detect_obstacle(
+    maps: SurfaceMaps, road: RoadAppearance, region: RoadRegion, left: LaneLine, right: LaneLine, camera: CameraModel,
+    scale: float,
+) -> Obstacle | None:
+    """The nearest object in the ego lane of a working image (None when the lane interior looks like road)."""
+    rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
+    a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
+    inset = INSET * (b - a)
+    lo = np.clip(np.ceil(a + inset), 0, region.width_px).astype(np.int64)
+    hi = np.clip(np.floor(b - inset), 0, region.width_px).astype(np.int64)
+    cols = np.arange(region.width_px)[None, :]
+    inside = (cols >= lo[:, None]) & (cols < hi[:, None])
+    foreign = foreign_mask(maps, road) & inside
+    count = foreign.sum(axis=1)
+    width = np.maximum(hi - lo, 0)
+    hit = (width > 0) & (count >= np.maximum(MIN_PX, MIN_SHARE * width))
+    bottom = _lowest_stretch_end(hit, MIN_ROWS)
+    if bottom is None:
+        return None
+    u = np.flatnonzero(foreign[bottom - MIN_ROWS + 1 : bottom + 1].any(axis=0))
+    v_frame = (rows[bottom] + 1.0) * scale  # the object stands on the lower edge of its lowest row
+    u_left, u_right = u.min() * scale, (u.max() + 1.0) * scale
+    range_m = camera.ground_range_m(v_frame)
+    return Obstacle(float(u_left), float(u_right), float(v_frame), camera.bearing_deg(0.5 * (u_left + u_right)),
+                    range_m if range_m is not None and math.isfinite(range_m) else None)
+
+
+def _lowest_stretch_end(hit: np.ndarray, min_rows: int) -> int | None:
+    """Index of the last row of the lowest stretch of ≥ min_rows consecutive True rows, or None."""
+    run = 0
+    best = None
+    for i, h in enumerate(hit):  # top to bottom; a few dozen rows
+        run = run + 1 if h else 0
+        if run >= min_rows and (i + 1 == len(hit) or not hit[i + 1]):
+            best = i
+    return best
