@@ -85,7 +85,7 @@ def test_4_no_rule_firing_gives_fear_1_plain(write_rules) -> None:
 
 @pytest.mark.parametrize("range_m", [0.05, 0.2, 0.4, 0.6])
 def test_5_imminent_collision_enters_at_once(range_m: float) -> None:
-    car = fg.VehicleLimits()
+    car = fg.VehicleLimits.preset("model_car")  # a car with a range sensor (the default has none)
     cmd = run(Subject.of(None, car), (Step(t_s=0.0, speed_mps=2.0, cues=fg.Cues(0.9, 120.0, 0.0, range_m, 0.5)),)).commands[0]
     if fg.policy.imminent_collision(range_m, 2.0, car):
         assert cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0

@@ -11,6 +11,8 @@ import pytest
 import fearguard as fg
 from fearguard.policy import ModeState, PolicyConfig, emergency_plan, envelope_speed_mps, imminent_collision, stopping_distance_m
 
+CAR = fg.VehicleLimits.preset("model_car")  # the 1:10 car with an HC-SR04 and QR localisation (cue-level tests use every cue)
+
 CALM = fg.Cues(0.9, 120.0, 0.0, math.inf, 0.5)
 LOST = fg.Cues(0.1, 120.0, 0.9, math.inf, 0.5)  # markings hidden, lane not found: road fear very high
 GLARE = fg.Cues(0.9, 250.0, 0.0, math.inf, 0.5)
@@ -28,7 +30,7 @@ def drive(guard: fg.FearGuard, cues: fg.Cues, t0: float, seconds: float, lead=No
 
 @pytest.fixture
 def guard(rules) -> fg.FearGuard:
-    return fg.FearGuard(lambda frame: 5.0, rules=rules)
+    return fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=CAR)
 
 
 def test_calm_drive_is_normal_pass_through_and_ramps_up(guard) -> None:
@@ -80,7 +82,7 @@ def test_follow_lead_without_range_crawls_and_clamps_steering(guard) -> None:
 
 def test_lost_road_without_lead_stops_holding_the_last_trusted_steering(rules) -> None:
     angles = iter([3.0] * 10 + [25.0] * 100)
-    guard = fg.FearGuard(lambda frame: next(angles), rules=rules)
+    guard = fg.FearGuard(lambda frame: next(angles), rules=rules, vehicle=CAR)
     drive(guard, CALM, 0.0, 1.0)
     cmd = drive(guard, LOST, 1.0, 2.0)[-1]
     assert cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
@@ -121,17 +123,20 @@ def test_imminent_collision_enters_at_once(guard) -> None:
 
 
 def test_envelope_limits_speed_near_an_obstacle(rules) -> None:
-    car = fg.VehicleLimits(max_decel_mps2=1.0)  # weak brakes: physics binds before fear does
+    car = dataclasses.replace(CAR, max_decel_mps2=1.0)  # weak brakes: physics binds before fear does
     guard = fg.FearGuard(lambda f: 0.0, rules=rules, vehicle=car)
     cmd = drive(guard, fg.Cues(0.9, 120.0, 0.0, 2.3, 0.5), 0.0, 10.0)[-1]
     v = cmd.speed_limit_mps
     assert v == pytest.approx(cmd.envelope_mps) and v < cmd.fear_limit_mps
+    # the range stays 2.3 m while the car drives 0.5 m/s; the estimate is 0.15 s old (mid-window), and the object
+    # may have braked at 4 m/s² since: closing 0.6 m/s, so it may be standing and the envelope is a standing obstacle's
+    assert cmd.closing_speed_mps == pytest.approx(car.lead_max_decel_mps2 * 0.15)
     assert stopping_distance_m(v, car) == pytest.approx(2.3 - 0.15, rel=1e-6)
-    assert "stopping envelope" in " ".join(cmd.reasons)
+    assert "safe distance envelope" in " ".join(cmd.reasons)
 
 
 def test_envelope_math() -> None:
-    car = fg.VehicleLimits()
+    car = CAR
     assert envelope_speed_mps(math.inf, car) == math.inf
     assert envelope_speed_mps(0.1, car) == 0.0
     assert not imminent_collision(math.inf, 2.0, car)
@@ -152,7 +157,8 @@ def test_envelope_math() -> None:
 )
 def test_faulty_steering_function_gives_a_safe_stop(rules, steer, fault) -> None:
     good = iter([4.0, 4.0])
-    guard = fg.FearGuard(lambda f: next(good, None) if next(iter([0])) == 0 and good.__length_hint__() else steer(f), rules=rules)
+    guard = fg.FearGuard(lambda f: next(good, None) if next(iter([0])) == 0 and good.__length_hint__() else steer(f),
+                      rules=rules, vehicle=CAR)
     drive(guard, CALM, 0.0, 0.2)
     cmd = guard.step(fg.Observation(t_s=0.5, speed_mps=1.0, cues=CALM))
     assert cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
@@ -161,7 +167,7 @@ def test_faulty_steering_function_gives_a_safe_stop(rules, steer, fault) -> None
 
 
 def test_numpy_steering_values_are_accepted(rules) -> None:
-    guard = fg.FearGuard(lambda f: np.float32(2.5), rules=rules)
+    guard = fg.FearGuard(lambda f: np.float32(2.5), rules=rules, vehicle=CAR)
     assert guard.step(fg.Observation(t_s=0.0, cues=CALM)).steering_deg == 2.5
 
 
@@ -190,7 +196,7 @@ def test_time_going_backwards_restarts_the_clock(guard) -> None:
 
 
 def test_fault_before_any_frame_and_internal_errors_never_raise(rules) -> None:
-    guard = fg.FearGuard(lambda f: 0.0, rules=rules)
+    guard = fg.FearGuard(lambda f: 0.0, rules=rules, vehicle=CAR)
     cmd = guard.step(fg.Observation(t_s=math.inf))
     assert cmd.strategy is fg.Strategy.STOP and cmd.fear == 1.0 and cmd.fear_level is fg.FearLevel.VERY_HIGH
 
@@ -234,7 +240,7 @@ def test_unknown_speed_assumes_the_worst_for_imminence(guard) -> None:
 
 
 def test_reset_and_rules_by_path(rules) -> None:
-    guard = fg.FearGuard(lambda f: 0.0, rules="rules/road_car.toml")
+    guard = fg.FearGuard(lambda f: 0.0, rules="rules/road_car.toml", vehicle=CAR)
     assert guard.rules.name != rules.name
     drive(guard, LOST, 0.0, 1.0)
     guard.reset()
@@ -264,7 +270,7 @@ def test_policy_defaults_are_safe() -> None:
 
 def test_a_fault_latches_stop_until_emergency_is_left(rules) -> None:
     outputs = iter([45.0] + [1.0] * 100)
-    guard = fg.FearGuard(lambda f: next(outputs), rules=rules)
+    guard = fg.FearGuard(lambda f: next(outputs), rules=rules, vehicle=CAR)
     assert guard.step(fg.Observation(t_s=0.0, cues=CALM)).strategy is fg.Strategy.STOP
     held = drive(guard, STALE, 0.1, 1.5)  # localisation alone would crawl, but the fault still latches STOP
     assert all(c.strategy is fg.Strategy.STOP and c.speed_limit_mps == 0.0 for c in held)
@@ -282,7 +288,7 @@ def test_emergency_remembers_why_it_braked_for_hold_s(guard) -> None:
 def test_a_wrapped_hough_steering_shares_the_pipeline_and_the_camera() -> None:
     cam = fg.CameraModel.default(320, 240, mount_height_m=0.15, pitch_deg=13.0)
     steer = fg.HoughLaneSteering(camera=cam)
-    guard = fg.FearGuard(steer, camera=cam)
+    guard = fg.FearGuard(steer, camera=cam, vehicle=CAR)
     assert guard.perception.pipeline is steer.pipeline and guard.camera is cam
     assert fg.FearGuard(fg.HoughLaneSteering(camera=cam)).camera is cam  # camera=None: the steering's camera
     frame = np.full((240, 320, 3), 90, np.uint8)  # a blank road: no lane, so vision says so
@@ -315,7 +321,7 @@ def test_a_frame_steering_must_bring_a_frame_pipeline() -> None:
 
 
 def test_the_command_carries_the_facts_of_its_own_frame(rules) -> None:
-    guard = fg.FearGuard(fg.HoughLaneSteering(), rules=rules)
+    guard = fg.FearGuard(fg.HoughLaneSteering(), rules=rules, vehicle=CAR)
     frame = np.full((240, 320, 3), 90, np.uint8)
     seen = guard.step(fg.Observation(t_s=0.0, speed_mps=1.0, frame=frame))
     assert seen.perceived is not None and seen.perceived.analysis is not None
@@ -338,7 +344,7 @@ def test_the_steering_of_a_frame_steering_comes_from_the_same_analysis(rules) ->
             calls.append("analysis")
             return 4.0
 
-    guard = fg.FearGuard(Recording(), rules=rules)
+    guard = fg.FearGuard(Recording(), rules=rules, vehicle=CAR)
     frame = np.full((240, 320, 3), 90, np.uint8)
     cmd = guard.step(fg.Observation(t_s=0.0, speed_mps=0.5, frame=frame))
     assert calls == ["analysis"] and guard.perception.pipeline._frames == 1  # analysed once, for cues and steering

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from fearguard.errors import FearguardError
 from fearguard.interrupt import StopSignal, stop_on_signals
+from fearguard.vehicle import PRESETS
 
 if TYPE_CHECKING:
     from fearguard.cues import Cues
@@ -95,7 +96,7 @@ def cmd_explain(args: argparse.Namespace) -> int:
     for text, strength in result.top_rules(args.top):
         print(f"  {strength:.2f}  {text}")
     lead = Lead(args.lead_bearing, args.lead_range) if args.lead_bearing is not None else None
-    cmd = _settle(FearGuard(lambda frame: 0.0, rules=rules), cues, lead)
+    cmd = _settle(FearGuard(lambda frame: 0.0, rules=rules, vehicle=PRESETS["model_car"]), cues, lead)  # every cue applies
     print(f"command after {EXPLAIN_SETTLE_S:g} s with these cues (steering function says 0 deg):")
     print(f"  mode {cmd.mode.name}, strategy {cmd.strategy.name}, speed limit {cmd.speed_limit_mps:.2f} m/s, "
           f"steering {cmd.steering_deg:+.1f} deg")

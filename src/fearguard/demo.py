@@ -9,6 +9,7 @@ from fearguard.cues import Cues
 from fearguard.fuzzy.rulebase import RuleBase
 from fearguard.observation import Lead, Observation
 from fearguard.supervisor import FearGuard
+from fearguard.vehicle import PRESETS
 
 RATE_HZ = 10.0  # [Hz]
 # (from s, label, cues, lead): a 1:10 car on a track with QR markers
@@ -26,7 +27,7 @@ SCRIPT: tuple[tuple[float, str, Cues, Lead | None], ...] = (
 
 def demo_drive(rules: RuleBase) -> Iterator[str]:
     """Yield a table: one row per 0.5 s and one per mode change, the car driving at the limit."""
-    guard = FearGuard(lambda frame: 1.5, rules=rules)
+    guard = FearGuard(lambda frame: 1.5, rules=rules, vehicle=PRESETS["model_car"])  # HC-SR04 and QR markers
     yield f"{'t_s':>5}  {'situation':<36} {'fear':>5} {'level':<9} {'mode':<9} {'strategy':<12} {'limit':>6} {'steer':>6}"
     speed, last_mode = 0.0, None
     end = SCRIPT[-1][0]

@@ -67,3 +67,6 @@ class Observation:
     qr_payload: str | None = None
     lead: Lead | LeadBox | None = None  # a Lead, or a box from an external detector (frame pixels)
     ultrasonic_echo_s: float | None = None  # raw HC-SR04 echo time, used when ultrasonic_range_m is None
+    # rate of change of the obstacle range (m/s, − = approaching) when the caller knows it (radar, simulator: the
+    # lead's speed minus the ego's); None: estimated from successive ranges
+    range_rate_mps: float | None = None

@@ -9,6 +9,7 @@ an unknown (worst) cue.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import time
 from dataclasses import dataclass, field
@@ -23,10 +24,11 @@ from fearguard.readings import reading
 from fearguard.sensors.localisation import LocalisationState, QrLocaliser
 from fearguard.sensors.ultrasonic import RangeEstimate, UltrasonicFilter
 from fearguard.vehicle import VehicleLimits
-from fearguard.vision.frame import FrameAnalysis, FramePipeline, invalid_frame_reason
+from fearguard.vision.frame import FrameAnalysis, FramePipeline
 from fearguard.vision.obstacle import Obstacle
 
-FROZEN_FRAMES = 3  # [frames] identical frames in a row that mean the camera froze (real sensors always have noise)
+FROZEN_S = 1.0  # [s] frames byte-identical for longer than this: the camera froze (a real camera always has noise);
+#                  shorter repeats are a loop faster than the camera (5 fps camera, 20 Hz loop): "no new frame"
 ULTRASONIC_CONE_DEG = 15.0  # [deg] a lead within ±half this bearing is what the ultrasonic sees
 _NAN = math.nan
 _UNSEEN = FrameAnalysis(lane_confidence=_NAN, brightness=_NAN, occlusion=_NAN, lead=None, qr_payloads=(), steering_deg=None)
@@ -83,17 +85,26 @@ class Perception:
         self.pipeline = pipeline if pipeline is not None else FramePipeline(camera)
         self.camera = self.pipeline.camera
         self.scan_qr = self.vehicle.has_qr_localisation  # no QR localisation on this car: no QR scan either
-        self.ultrasonic = UltrasonicFilter(self.vehicle.ultrasonic_min_range_m, self.vehicle.ultrasonic_max_range_m)
-        self.localiser = QrLocaliser(marker_spacing_m=marker_spacing_m)
+        v = self.vehicle
+        self.ultrasonic = UltrasonicFilter(v.ultrasonic_min_range_m, v.ultrasonic_max_range_m,
+                                           max_closing_speed_mps=v.max_closing_speed_mps)
+        self.localiser = self._new_localiser(marker_spacing_m)
         self._marker_spacing_m = marker_spacing_m
+        self.frozen_s = FROZEN_S
         self._last_signature: bytes | None = None
-        self._same_frames = 0
+        self._same_since_s = _NAN  # when the current frame content was first seen
+        self._last_analysis: FrameAnalysis | None = None
+
+    def _new_localiser(self, spacing_m: float) -> QrLocaliser:
+        """The QR localiser with the car's speed bound and route (VehicleLimits)."""
+        v = self.vehicle
+        return QrLocaliser(marker_spacing_m=spacing_m, route=v.qr_route, max_speed_mps=v.localiser_max_speed_mps)
 
     def reset(self) -> None:
         self.pipeline.reset()
         self.ultrasonic.reset()
-        self.localiser = QrLocaliser(marker_spacing_m=self._marker_spacing_m)
-        self._last_signature, self._same_frames = None, 0
+        self.localiser = self._new_localiser(self._marker_spacing_m)
+        self._last_signature, self._same_since_s, self._last_analysis = None, _NAN, None
 
     def perceive(self, obs: Observation) -> Perceived:
         """Cues for one Observation; readings that are missing or not numbers count as missing."""
@@ -126,14 +137,20 @@ class Perception:
         if frame is None:
             reasons.append("camera: no frame: vision cues unknown (worst)")
             return None
-        if self._frozen(frame):
-            reasons.append(f"camera: frozen ({self._same_frames} identical frames): vision cues unknown (worst)")
+        same_s = self._same_content_s(frame, t)
+        if same_s > self.frozen_s:
+            reasons.append(f"camera: frozen (identical frames for {same_s:.1f} s): vision cues unknown (worst)")
             return None
+        if same_s > 0.0 and self._last_analysis is not None:
+            facts.append(f"camera: no new frame (same content for {same_s:.2f} s): last analysis reused")
+            return self._last_analysis
         try:
             analysis = self.pipeline.process(frame, t if math.isfinite(t) else None, box, scan_qr=self.scan_qr)
         except Exception as exc:  # vision is a measurement: its failure is an unknown, not a crash
             reasons.append(f"camera: analysis failed ({type(exc).__name__}: {exc}): vision cues unknown (worst)")
+            self._last_analysis = None
             return None
+        self._last_analysis = analysis
         reasons.extend(analysis.reasons)
         ev, ex = analysis.evidence, analysis.exposure
         if ev is not None:
@@ -150,15 +167,20 @@ class Perception:
             facts.append(f"occlusion {analysis.occlusion:.2f} of the expected marking region hidden{hidden_by}")
         return analysis
 
-    def _frozen(self, frame: object) -> bool:
-        """True when this frame is byte-identical (on a sparse grid) to the last FROZEN_FRAMES − 1 ones."""
-        if invalid_frame_reason(frame) is not None:  # not an image: the pipeline says why, nothing to compare
-            self._last_signature, self._same_frames = None, 0
-            return False
-        signature = np.ascontiguousarray(frame[::7, ::7]).tobytes()
-        self._same_frames = self._same_frames + 1 if signature == self._last_signature else 1
-        self._last_signature = signature
-        return self._same_frames >= FROZEN_FRAMES
+    def _same_content_s(self, frame: object, t: float) -> float:
+        """How long the frame content has been byte-identical (0.0: new content). Judged by the pixels, never by the
+        array object: a caller that refills one buffer with new pixels gets every frame analysed afresh."""
+        if not isinstance(frame, np.ndarray) or frame.size == 0 or not math.isfinite(t):
+            self._last_signature, self._same_since_s = None, _NAN
+            return 0.0
+        pixels = np.ascontiguousarray(frame)
+        digest = hashlib.blake2b(memoryview(pixels).cast("B"), digest_size=16)
+        digest.update(f"{pixels.shape}{pixels.dtype}".encode())
+        signature = digest.digest()
+        if signature != self._last_signature:
+            self._last_signature, self._same_since_s = signature, t
+            return 0.0
+        return max(t - self._same_since_s, 1e-9)
 
     # -- ultrasonic -----------------------------------------------------------------------------
     def _range(
@@ -186,7 +208,7 @@ class Perception:
         payloads = list(seen)
         if obs.qr_payload is not None:
             payloads.append(obs.qr_payload)
-        state = self.localiser.update(t, payloads, reading(obs.odometer_m))
+        state = self.localiser.update(t, payloads, reading(obs.odometer_m), reading(obs.speed_mps))
         reasons.extend(state.reasons)
         return state.staleness_s, state
 

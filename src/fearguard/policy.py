@@ -11,7 +11,7 @@ so a cue getting worse can only add caps: the limit never rises when a cue worse
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from enum import Enum
 from itertools import pairwise
@@ -26,6 +26,7 @@ from fearguard.readings import finite_reading
 from fearguard.vehicle import VehicleLimits
 
 ENVELOPE_SHRINK = 1e-9  # [-] keeps v·t_r + v²/2a ≤ d − margin true after floating-point rounding
+TIME_EPS_S = 1e-9  # [s] slack in time comparisons, so that 10 steps of 0.1 s count as 1.0 s
 
 
 class Mode(Enum):
@@ -59,6 +60,20 @@ class PolicyConfig:
     crawl_fraction: float = 0.15  # [-] of max speed, CRAWL cap (and FOLLOW_LEAD without a range)
     follow_time_gap_s: float = 1.5  # [s] FOLLOW_LEAD speed = lead range / time gap
     follow_gain: float = 1.0  # [deg/deg] steering per degree of lead bearing
+    watchdog_frames: int = 10  # [frames] a frame later than this many typical periods after the last is a stall
+    watchdog_age_s: float = 1.0  # [s] ... and later than this (openpilot: a message older than max(10 periods, …))
+    recovery_dwell_s: float = 1.0  # [s] at standstill after a road-picture stop before a re-acquisition creep
+    recovery_creep_m: float = 0.6  # [m] longest single creep
+    recovery_creep_s: float = 4.0  # [s] longest single creep in time
+    recovery_max_creeps: int = 4  # [-] creeps per EMERGENCY; then the car stays stopped and says why
+    recovery_max_total_m: float = 2.0  # [m] total creep distance per EMERGENCY
+    standstill_mps: float = 0.05  # [m/s] at or below this the car counts as standing still
+    recovery_min_confidence: float = 0.25  # [-] lane_confidence from which the lane counts as partly seen (creep allowed)
+    oscillation_deg: float = 10.0  # [deg] a steering sign flip between two frames, both beyond this, is large
+    oscillation_flips: int = 3  # [-] this many large sign flips in a row: the estimator oscillates (a fault)
+    lane_check_lookahead_s: float = 1.0  # [s] the lane check looks this far ahead (time to line crossing)
+    lane_check_min_deg: float = 5.0  # [deg] the estimator must steer this much more toward the boundary than the lane
+    lane_check_fraction: float = 0.6  # [-] of max speed while the lane check overrides the estimator
 
     @classmethod
     def from_table(cls, src: TomlSource, data: object, key_path: str = "policy") -> PolicyConfig:
@@ -68,8 +83,8 @@ class PolicyConfig:
         for key in t.data:
             if key == "speed_fraction":
                 values[key] = _fractions(t, key)
-            elif key == "enter_frames":
-                values[key] = t.integer(key, low=1)
+            elif key in _WHOLE_KEYS:
+                values[key] = t.integer(key, low=0 if key == "recovery_max_creeps" else 1)
             else:
                 values[key] = t.number(key)
         cfg = cls(**values)
@@ -84,10 +99,21 @@ class PolicyConfig:
             ("crawl_fraction", 0.0 <= cfg.crawl_fraction <= 1.0, "must be in [0, 1]"),
             ("follow_time_gap_s", cfg.follow_time_gap_s > 0.0, "must be > 0"),
             ("follow_gain", cfg.follow_gain >= 0.0, "must be >= 0"),
+            *((k, getattr(cfg, k) > 0.0, "must be > 0") for k in _POSITIVE_KEYS),
+            ("recovery_dwell_s", cfg.recovery_dwell_s >= 0.0, "must be >= 0"),
+            ("standstill_mps", cfg.standstill_mps >= 0.0, "must be >= 0"),
+            ("lane_check_min_deg", cfg.lane_check_min_deg >= 0.0, "must be >= 0"),
+            ("lane_check_fraction", 0.0 <= cfg.lane_check_fraction <= 1.0, "must be in [0, 1]"),
+            ("recovery_min_confidence", 0.0 <= cfg.recovery_min_confidence <= 1.0, "must be in [0, 1]"),
         ):
             if not ok:
                 raise t.fail(key, f"{problem}, got {getattr(cfg, key)}")
         return cfg
+
+
+_WHOLE_KEYS = ("enter_frames", "watchdog_frames", "recovery_max_creeps", "oscillation_flips")
+_POSITIVE_KEYS = ("watchdog_age_s", "recovery_creep_m", "recovery_creep_s", "recovery_max_total_m", "oscillation_deg",
+                  "lane_check_lookahead_s")
 
 
 def _fractions(t: Table, key: str) -> tuple[float, ...]:
@@ -122,21 +148,95 @@ def stopping_distance_m(speed_mps: float, vehicle: VehicleLimits) -> float:
     return speed_mps * vehicle.reaction_time_s + braking_m
 
 
-def envelope_speed_mps(range_m: float, vehicle: VehicleLimits) -> float:
-    """Largest v with v·t_r + v²/(2a) ≤ max(0, d − margin); inf when nothing is in range."""
+def lead_speed_mps(speed_mps: float | None, closing_speed_mps: float | None) -> float:
+    """Speed of the object ahead (≥ 0) from the ego's speed and the closing speed; unknown either: 0 (standing, worst)."""
+    if speed_mps is None or closing_speed_mps is None or not math.isfinite(closing_speed_mps):
+        return 0.0
+    return max(0.0, speed_mps - closing_speed_mps)
+
+
+def envelope_speed_mps(range_m: float, vehicle: VehicleLimits, lead_speed: float = 0.0) -> float:
+    """Largest v inside the responsibility-sensitive-safety distance; inf when nothing is in range.
+
+    The ego reacts after t_r and brakes at a; the object ahead, now at ``lead_speed`` (m/s, ≥ 0), may brake at
+    ``lead_max_decel_mps2`` (b): v·t_r + v²/(2a) ≤ max(0, d − margin + v_f²/(2b)). A standing obstacle (v_f = 0)
+    is the special case v·t_r + v²/(2a) ≤ max(0, d − margin). Faster closing (a slower lead) never raises it.
+    """
     if math.isinf(range_m):
         return math.inf
-    room = max(0.0, range_m - vehicle.stop_margin_m)
+    v_f = max(0.0, lead_speed) if math.isfinite(lead_speed) else 0.0
+    room = max(0.0, range_m - vehicle.stop_margin_m + v_f * v_f / (2.0 * vehicle.lead_max_decel_mps2))
     t_r, a = vehicle.reaction_time_s, vehicle.max_decel_mps2
     v = 2.0 * room / (t_r + math.sqrt(t_r * t_r + 2.0 * room / a)) if room > 0.0 else 0.0
     return v * (1.0 - ENVELOPE_SHRINK)
 
 
-def imminent_collision(range_m: float, speed_mps: float, vehicle: VehicleLimits) -> bool:
-    """The car cannot stop short of the obstacle from its current speed (or is inside the margin)."""
+def imminent_collision(range_m: float, speed_mps: float, vehicle: VehicleLimits, closing_speed_mps: float | None = None) -> bool:
+    """No braking within the limits avoids contact: the gap is gone before the ego sheds its closing speed.
+
+    The same relative-motion model as the envelope, on what is happening now: the ego brakes at a after t_r
+    until it moves at the lead's speed (the lead holding its speed); closing c = v − v_f, so the gap shrinks by
+    c·t_r + c²/(2a). Unknown closing speed: a standing obstacle (c = v). Inside the margin: imminent.
+    """
     if math.isinf(range_m):
         return False
-    return range_m <= vehicle.stop_margin_m or stopping_distance_m(speed_mps, vehicle) >= range_m - vehicle.stop_margin_m
+    if range_m <= vehicle.stop_margin_m:
+        return True
+    closing = speed_mps - lead_speed_mps(speed_mps, closing_speed_mps) if closing_speed_mps is not None else speed_mps
+    closing = max(0.0, closing)
+    return stopping_distance_m(closing, vehicle) >= range_m - vehicle.stop_margin_m
+
+
+def lateral_speed_mps(steering_deg: float, vehicle: VehicleLimits) -> float:
+    """Largest speed at this steering angle within the lateral acceleration: v ≤ √(a_lat·L/|tan δ|) (bicycle model)."""
+    tan_d = abs(math.tan(math.radians(steering_deg)))
+    if tan_d < 1e-12:
+        return math.inf
+    return math.sqrt(vehicle.max_lateral_accel_mps2 * vehicle.wheelbase_m / tan_d)
+
+
+def rate_limited_steering_deg(previous_deg: float | None, target_deg: float, dt_s: float, vehicle: VehicleLimits) -> float:
+    """The smallest change toward the target that respects the steering-rate limit (the target when it is within)."""
+    if previous_deg is None:
+        return target_deg
+    step = vehicle.max_steering_rate_dps * max(dt_s, 0.0)
+    return min(max(target_deg, previous_deg - step), previous_deg + step)
+
+
+def oscillating(recent_deg: Sequence[float], cfg: PolicyConfig) -> bool:
+    """The last ``oscillation_flips`` frame-to-frame changes are all sign flips between angles beyond ``oscillation_deg``."""
+    tail = list(recent_deg)[-(cfg.oscillation_flips + 1):]
+    if len(tail) < cfg.oscillation_flips + 1:
+        return False
+    return all(a * b < 0 and min(abs(a), abs(b)) >= cfg.oscillation_deg for a, b in pairwise(tail))
+
+
+CLOSING_WINDOW_S = 0.3  # [s] ranges this recent give the closing speed at cue level (6 frames at 20 Hz: ~0.15 s lag)
+
+
+def closing_speed_from_ranges(
+    ranges: Sequence[tuple[float, float]], t_s: float, lead_max_decel_mps2: float = 0.0, window_s: float = CLOSING_WINDOW_S,
+) -> float | None:
+    """Closing speed (m/s, + = closing) now, from the (time, range) pairs of the last ``window_s``.
+
+    Minus the least-squares slope is the closing speed at the window's mean time; since then the object ahead
+    may have braked at ``lead_max_decel_mps2``, so that much is added for the lag (the estimate errs toward
+    closing). None with fewer than two readings in the window (unknown: the obstacle counts as standing).
+    """
+    recent = [(t, r) for t, r in ranges if t_s - t <= window_s + TIME_EPS_S]
+    if len(recent) < 2:
+        return None
+    mt = sum(t for t, _ in recent) / len(recent)
+    mr = sum(r for _, r in recent) / len(recent)
+    var = sum((t - mt) ** 2 for t, _ in recent)
+    if var <= 0.0:
+        return None
+    return -sum((t - mt) * (r - mr) for t, r in recent) / var + lead_max_decel_mps2 * (t_s - mt)
+
+
+def watchdog_s(period_s: float | None, cfg: PolicyConfig) -> float:
+    """Longest gap between frames before the input counts as stalled: max(N typical periods, the configured age)."""
+    return max(cfg.watchdog_age_s, cfg.watchdog_frames * period_s) if period_s is not None else cfg.watchdog_age_s
 
 
 def rate_limited_mps(previous_mps: float, target_mps: float, dt_s: float, cfg: PolicyConfig) -> float:
@@ -228,6 +328,12 @@ class EmergencyPlan:
     why: str
 
 
+def active_causes(cause_fears: Mapping[Cause, float], state: ModeState, cfg: PolicyConfig) -> frozenset[Cause]:
+    """Causes an EMERGENCY plan answers: latched at or since entry, or now at or above the exit threshold."""
+    now = {c for c in Cause if cause_fears.get(c, 0.0) >= cfg.emergency_exit_fear}
+    return frozenset({c for c, _ in state.latched} | now)
+
+
 def emergency_plan(
     cause_fears: Mapping[Cause, float],
     state: ModeState,
@@ -235,34 +341,112 @@ def emergency_plan(
     held_steering_deg: float,
     cfg: PolicyConfig,
     vehicle: VehicleLimits,
+    creep: str = "",
 ) -> EmergencyPlan:
     """Analyse, then act: every active cause proposes a plan; the one with the lowest cap wins.
 
     Active: latched at or since entry, or now at or above the exit threshold. A cue getting worse can
     only add causes, so it can only lower the cap: the speed limit stays monotone in every cue.
+    ``creep`` (the recovery's reason, empty = none): the road-picture stop becomes a bounded CRAWL to
+    re-acquire the road (the supervisor allows it only with the range clear and no fault).
     """
-    active = {c for c, _ in state.latched} | {c for c in Cause if cause_fears.get(c, 0.0) >= cfg.emergency_exit_fear}
+    active = active_causes(cause_fears, state, cfg)
     stop = EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg, f"fault: stop, holding {held_steering_deg:+.1f} deg")
     plans = [stop] if state.fault else []
+    crawl_cap = cfg.crawl_fraction * vehicle.max_speed_mps
     for cause in sorted(active, key=list(Cause).index):
         f = cause_fears.get(cause, 0.0)
         if cause is Cause.COLLISION:
             plans.append(EmergencyPlan(Strategy.STOP, 0.0, None, f"collision risk (fear {f:.2f}): stop"))
         elif cause is Cause.ROAD and lead is not None and lead.usable:
             rng = lead.usable_range_m
-            cap = rng / cfg.follow_time_gap_s if rng is not None else cfg.crawl_fraction * vehicle.max_speed_mps
+            cap = rng / cfg.follow_time_gap_s if rng is not None else crawl_cap
             bearing = float(lead.bearing_deg)  # usable: a reading (readings.py), e.g. a Fraction, as a float
             steer = float(np.clip(cfg.follow_gain * bearing, -vehicle.max_steering_deg, vehicle.max_steering_deg))
             gap = f"range {rng:.2f} m, {cfg.follow_time_gap_s:.1f} s gap" if rng is not None else "no range: crawl speed"
             why = f"road not trusted (fear {f:.2f}): follow the lead at bearing {bearing:+.1f} deg ({gap})"
             plans.append(EmergencyPlan(Strategy.FOLLOW_LEAD, cap, steer, why))
+        elif cause is Cause.ROAD and creep:
+            why = f"road not trusted (fear {f:.2f}), range clear: {creep}, holding {held_steering_deg:+.1f} deg"
+            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap, held_steering_deg, why))
         elif cause is Cause.ROAD:
             why = f"road not trusted (fear {f:.2f}) and no lead to follow: stop, holding {held_steering_deg:+.1f} deg"
             plans.append(EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg, why))
         else:
-            cap = cfg.crawl_fraction * vehicle.max_speed_mps
-            plans.append(EmergencyPlan(Strategy.CRAWL, cap, None, f"localisation stale (fear {f:.2f}): crawl"))
+            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap, None, f"localisation stale (fear {f:.2f}): crawl"))
     best = min(plans, key=lambda p: (p.cap_mps, _Priority[p.strategy.name].value), default=stop)
     road_steer = [p.steering_deg for p in plans if p.steering_deg is not None]
     steering = best.steering_deg if best.steering_deg is not None else (road_steer[0] if road_steer else None)
     return EmergencyPlan(best.strategy, best.cap_mps, steering, best.why)
+
+
+# -- recovery: analyse, then act ------------------------------------------------------------------
+@dataclass(frozen=True)
+class Recovery:
+    """The re-acquisition memory of one EMERGENCY: creeps done, distance crept, the dwell and the creep under way."""
+
+    creeps: int = 0  # creeps started in this EMERGENCY
+    total_m: float = 0.0  # distance crept in this EMERGENCY
+    still_since_s: float | None = None  # standing still (eligible) since
+    creep_since_s: float | None = None  # the current creep started at (None: not creeping)
+    creep_m: float = 0.0  # distance of the current creep
+
+
+def recovery_eligible(
+    state: ModeState, active: frozenset[Cause], range_m: float, lead: Lead | None, imminent: bool,
+) -> bool:
+    """An EMERGENCY caused by the road picture alone: no fault, no collision cause, range clear, no lead to follow."""
+    return (
+        state.mode is Mode.EMERGENCY and not state.fault and not imminent and Cause.ROAD in active
+        and Cause.COLLISION not in active and math.isinf(range_m) and range_m > 0 and (lead is None or not lead.usable)
+    )
+
+
+def next_recovery(
+    rec: Recovery, eligible: bool, t_s: float, dt_s: float, speed_mps: float, cfg: PolicyConfig, lane_seen: bool = True,
+) -> tuple[Recovery, str]:
+    """Advance the recovery one frame; returns the new memory and, while creeping, the creep's reason (else "").
+
+    After ``recovery_dwell_s`` at standstill the car creeps at most ``recovery_creep_m`` and ``recovery_creep_s``,
+    at most ``recovery_max_creeps`` times and ``recovery_max_total_m`` in all; not eligible = no creep now (a creep
+    under way ends). A creep starts only while something of the lane is seen (``lane_seen``): creeping blind cannot
+    re-acquire a road that is not there; a flicker of the picture during a creep does not end it.
+    The distance is the speed integrated over time (unknown speed counts as the top speed: the creep ends sooner).
+    """
+    moved = max(0.0, speed_mps) * max(dt_s, 0.0)
+    if rec.creep_since_s is not None:
+        creep_m, total_m = rec.creep_m + moved, rec.total_m + moved
+        done = (creep_m >= cfg.recovery_creep_m or t_s - rec.creep_since_s >= cfg.recovery_creep_s - TIME_EPS_S
+                or total_m >= cfg.recovery_max_total_m)
+        if eligible and not done:
+            why = (f"re-acquisition creep {rec.creeps} of {cfg.recovery_max_creeps} "
+                   f"({creep_m:.2f} of {cfg.recovery_creep_m:.2f} m, {t_s - rec.creep_since_s:.1f} of {cfg.recovery_creep_s:.1f} s)")
+            return Recovery(rec.creeps, total_m, None, rec.creep_since_s, creep_m), why
+        return Recovery(rec.creeps, total_m), ""
+    if speed_mps > cfg.standstill_mps or recovery_exhausted(rec, cfg):
+        return Recovery(rec.creeps, rec.total_m), ""
+    still = t_s if rec.still_since_s is None else rec.still_since_s
+    if not (eligible and lane_seen) or t_s - still < cfg.recovery_dwell_s - TIME_EPS_S:
+        return Recovery(rec.creeps, rec.total_m, still), ""  # the dwell counts standing still; the creep waits
+    why = f"re-acquisition creep {rec.creeps + 1} of {cfg.recovery_max_creeps} after {t_s - still:.1f} s at standstill"
+    return Recovery(rec.creeps + 1, rec.total_m, None, t_s, 0.0), why
+
+
+def recovery_exhausted(rec: Recovery, cfg: PolicyConfig) -> bool:
+    """No creep left in this EMERGENCY: the car stays stopped."""
+    return rec.creeps >= cfg.recovery_max_creeps or rec.total_m >= cfg.recovery_max_total_m
+
+
+def recovery_status(rec: Recovery, eligible: bool, cfg: PolicyConfig, t_s: float, lane_seen: bool = True) -> str:
+    """What the recovery is doing while the car is stopped by the road picture (for the reasons)."""
+    if not eligible:
+        return ""
+    if recovery_exhausted(rec, cfg):
+        return (f"recovery exhausted: {rec.creeps} creep(s), {rec.total_m:.2f} m crept, the road is still not seen: "
+                f"staying stopped")
+    if not lane_seen:
+        return (f"recovery: nothing of the lane seen (confidence below {cfg.recovery_min_confidence:.2f}): "
+                f"a creep cannot re-acquire it, staying stopped")
+    if rec.still_since_s is not None:
+        return f"recovery: analysing at standstill ({t_s - rec.still_since_s:.1f} of {cfg.recovery_dwell_s:.1f} s before a creep)"
+    return "recovery: waiting for standstill before a creep"

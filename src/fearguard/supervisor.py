@@ -11,6 +11,8 @@ as Python code expects (they are not faults of the car but requests to stop the 
 from __future__ import annotations
 
 import math
+import statistics
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -21,24 +23,40 @@ from fearguard.errors import describe, describe_exception
 from fearguard.fear import Cause, FearLevel, FearResult
 from fearguard.fuzzy.loader import load_rules
 from fearguard.fuzzy.rulebase import RuleBase
+from fearguard.lane_check import LaneCheck, lane_check
 from fearguard.observation import Lead, Observation  # Observation re-exported: fearguard.supervisor.Observation keeps working
 from fearguard.perception import FrameSteering, Perceived, Perception
 from fearguard.policy import (
     Mode,
     ModeState,
+    Recovery,
     Strategy,
+    active_causes,
+    closing_speed_from_ranges,
     emergency_plan,
     envelope_speed_mps,
     fear_speed_mps,
     imminent_collision,
+    lateral_speed_mps,
+    lead_speed_mps,
     next_mode,
+    next_recovery,
+    oscillating,
     rate_limited_mps,
+    rate_limited_steering_deg,
+    recovery_eligible,
+    recovery_status,
+    watchdog_s,
 )
 from fearguard.readings import finite_reading
+from fearguard.steering_deadline import SteeringDeadline
 from fearguard.vehicle import VehicleLimits
+from fearguard.vision.ground import lane_geometry
 
 SteeringFunction = Callable[[Any], float]
 TOP_RULES_IN_REASONS = 3  # [-] rules quoted in a command's reasons
+PERIOD_MEMORY = 9  # [frames] gaps between frames whose median is the typical frame period (watchdog)
+RANGE_MEMORY = 16  # [frames] obstacle ranges kept for the closing speed at cue level
 
 
 @dataclass(frozen=True)
@@ -59,6 +77,7 @@ class Command:
     # what perception measured on THIS frame (lanes, lead box, timings: for logs and overlays); None for cue-level
     # frames and faults before perception. Not part of the decision: excluded from equality and repr.
     perceived: Perceived | None = field(default=None, compare=False, repr=False)
+    closing_speed_mps: float = math.nan  # how fast the obstacle ahead comes closer (+), as the envelope used it; NaN unknown
 
 
 @dataclass
@@ -67,6 +86,12 @@ class _State:
     last_t_s: float | None = None
     limit_mps: float | None = None
     trusted_steering_deg: float = 0.0  # last steering while the road was trusted, held when it is lost
+    out_steering_deg: float | None = None  # last steering answered (the rate limit starts from it)
+    estimator_distrusted: bool = False  # the last lane check overrode the wrapped steering
+    recovery: Recovery = field(default_factory=Recovery)
+    raw_steering: deque[float] = field(default_factory=deque)  # the last oscillation_flips + 1 wrapped angles
+    periods_s: deque[float] = field(default_factory=lambda: deque(maxlen=PERIOD_MEMORY))
+    ranges: deque[tuple[float, float]] = field(default_factory=lambda: deque(maxlen=RANGE_MEMORY))
 
 
 class FearGuard:
@@ -75,6 +100,10 @@ class FearGuard:
     A ``FrameSteering`` (``HoughLaneSteering``) shares its frame pipeline: each frame is analysed once,
     for the cues and the steering. Its camera is the supervisor's camera; giving another one is a
     ``ValueError`` (``camera=None`` takes the steering's).
+
+    ``steering_deadline_s`` (off by default): the steering function runs in a worker thread and an
+    answer later than this counts as a fault. It trades determinism for timeliness — whether a slow
+    answer makes the deadline depends on the machine's load — so replays and tests leave it off.
     """
 
     def __init__(
@@ -83,6 +112,7 @@ class FearGuard:
         rules: RuleBase | str | None = None,
         vehicle: VehicleLimits | None = None,
         camera: CameraModel | None = None,
+        steering_deadline_s: float | None = None,
     ) -> None:
         self.steer = steer
         self.rules = rules if isinstance(rules, RuleBase) else load_rules(rules)
@@ -91,6 +121,7 @@ class FearGuard:
         shared = self._frame_steering.pipeline if self._frame_steering is not None else None
         self.perception = Perception(self.vehicle, camera, shared)
         self.camera = self.perception.camera
+        self._deadline = SteeringDeadline(steering_deadline_s) if steering_deadline_s is not None else None
         self._state = _State()
 
     def reset(self) -> None:
@@ -115,12 +146,40 @@ class FearGuard:
             return self._fault_command(obs, f"fault: time t_s={describe(obs.t_s)} is not a finite number", None)
         if st.last_t_s is not None and t <= st.last_t_s:
             return self._fault_command(obs, f"fault: time did not increase ({st.last_t_s:.3f} s → {t:.3f} s)", t)
+        stall = self._watchdog(t)
         cues, cue_notes, perceived, lead = self._cues(obs)
         result = self.rules.evaluate(cues)
         steering, steer_fault = self._steering(obs, perceived)
-        if steer_fault:
-            return self._fault_command(obs, steer_fault, t, cues, result, perceived)
+        fault = stall or steer_fault or self._oscillation(steering if not steer_fault else None)
+        if fault:
+            return self._fault_command(obs, fault, t, cues, result, perceived)
         return self._decide(obs, t, cues, result, steering, cue_notes, lead, perceived)
+
+    def _watchdog(self, t: float) -> str:
+        """A frame later than max(N typical periods, the configured age) after the last one: the input stalled."""
+        st = self._state
+        if st.last_t_s is None:
+            return ""
+        gap = t - st.last_t_s
+        allowed = watchdog_s(statistics.median(st.periods_s) if st.periods_s else None, self.rules.policy)
+        if gap > allowed:
+            return f"fault: input stalled {gap:.1f} s (watchdog {allowed:.1f} s)"
+        st.periods_s.append(gap)
+        return ""
+
+    def _oscillation(self, steering: float | None) -> str:
+        """An estimator flipping between large angles of opposite sign frame after frame is a fault."""
+        st, cfg = self._state, self.rules.policy
+        if steering is None:
+            st.raw_steering.clear()
+            return ""
+        st.raw_steering.append(steering)
+        while len(st.raw_steering) > cfg.oscillation_flips + 1:
+            st.raw_steering.popleft()
+        if oscillating(st.raw_steering, cfg):
+            return (f"fault: steering estimator oscillates ({cfg.oscillation_flips} sign flips in a row beyond "
+                    f"±{cfg.oscillation_deg:.0f} deg: {', '.join(f'{a:+.0f}' for a in st.raw_steering)} deg)")
+        return ""
 
     def _cues(self, obs: Observation) -> tuple[Cues, list[str], Perceived | None, Lead | None]:
         """Cues from the observation (given, or measured by perception); absent sensors neutral, failed ones worst."""
@@ -145,11 +204,17 @@ class FearGuard:
     def _steering(self, obs: Observation, perceived: Perceived | None) -> tuple[float, str]:
         """The wrapped steering's angle: from this frame's analysis for a FrameSteering, else from the frame."""
         analysis = perceived.analysis if perceived is not None else None
+        if self._frame_steering is not None and analysis is not None:
+            call, arg = self._frame_steering.steer_from, analysis
+        else:
+            call, arg = self.steer, obs.frame
         try:
-            if self._frame_steering is not None and analysis is not None:
-                raw = self._frame_steering.steer_from(analysis)
+            if self._deadline is not None:
+                raw, late = self._deadline.call(call, arg)
+                if late:
+                    return 0.0, late
             else:
-                raw = self.steer(obs.frame)
+                raw = call(arg)
         except Exception as exc:  # the wrapped estimator is foreign code: any failure is a fault
             return 0.0, f"fault: steering function raised {describe_exception(exc)}"
         value = finite_reading(raw)
@@ -166,34 +231,69 @@ class FearGuard:
     ) -> Command:
         st, v, cfg = self._state, self.vehicle, self.rules.policy
         speed = finite_reading(obs.speed_mps)
-        speed_now = v.max_speed_mps if speed is None or speed < 0 else speed  # unknown speed: assume the worst
+        speed = speed if speed is not None and speed >= 0 else None
+        speed_now = v.max_speed_mps if speed is None else speed  # unknown speed: assume the worst
         range_m = self._range_for_policy(cues)
-        imminent = imminent_collision(range_m, speed_now, v)
+        closing = self._closing_speed(obs, t, range_m, perceived)
+        imminent = imminent_collision(range_m, speed_now, v, closing)
         over = frozenset(c for c, f in result.cause_fears.items() if f >= cfg.emergency_enter_fear)
         over |= {Cause.COLLISION} if imminent else set()
         st.mode, event = next_mode(st.mode, result.fear, t, at_once=imminent, cfg=cfg, cause_fears=result.cause_fears, over=over)
+        dt = 0.0 if st.last_t_s is None else t - st.last_t_s
         fear_limit = fear_speed_mps(result.fear, self.rules.level_anchors, cfg, v)
-        envelope = envelope_speed_mps(range_m, v)
-        target = min(fear_limit, envelope)
-        mode, strategy, out_steering = st.mode.mode, Strategy.PASS_THROUGH, steering
+        # nothing in range: an obstacle may stand just beyond what the range sensor sees (stop within the seen distance)
+        seen_m = range_m if math.isfinite(range_m) or not v.has_ultrasonic else v.ultrasonic_max_range_m
+        envelope = envelope_speed_mps(seen_m, v, lead_speed_mps(speed, closing) if seen_m == range_m else 0.0)
         reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {result.dominant_cause.value}"]
+        road_calm = result.cause_fears[Cause.ROAD] < cfg.caution_fear
+        check = self._lane_check(perceived, steering, speed_now) if road_calm else None
+        wanted, caps, mode, strategy = steering, [fear_limit, envelope], st.mode.mode, Strategy.PASS_THROUGH
+        if check is not None:
+            st.estimator_distrusted = check.override_deg is not None
+        if check is not None and check.override_deg is not None:
+            wanted, mode = check.override_deg, Mode.CAUTION if mode is Mode.NORMAL else mode
+            caps.append(cfg.lane_check_fraction * v.max_speed_mps)
+            reasons.append(check.why)
+        elif check is None and st.estimator_distrusted:  # the check cannot run now: do not go back to a faulty estimator
+            wanted, mode = st.trusted_steering_deg, Mode.CAUTION if mode is Mode.NORMAL else mode
+            caps.append(cfg.lane_check_fraction * v.max_speed_mps)
+            reasons.append(f"lane check: the estimator steered out of the lane when last checked: holding the lane "
+                           f"geometry's {wanted:+.1f} deg")
         if st.mode.mode is Mode.EMERGENCY:
-            plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v)
-            strategy, target = plan.strategy, min(target, plan.cap_mps)
-            if plan.steering_deg is not None:
-                out_steering = plan.steering_deg
+            active = active_causes(result.cause_fears, st.mode, cfg)
+            eligible, seen = recovery_eligible(st.mode, active, range_m, lead, imminent), self._lane_seen(cues, perceived)
+            st.recovery, creep = next_recovery(st.recovery, eligible, t, dt, speed_now, cfg, seen)
+            plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep)
+            strategy = plan.strategy
+            caps.append(plan.cap_mps)
+            wanted = plan.steering_deg if plan.steering_deg is not None else wanted
             reasons.append(f"EMERGENCY {strategy.name}: {plan.why}")
-        elif result.cause_fears[Cause.ROAD] < cfg.caution_fear:
-            st.trusted_steering_deg = steering  # the road picture is calm: remember its steering (held if it is lost)
+            lane_steer = perceived.analysis.steering_deg if perceived is not None and perceived.analysis is not None else None
+            if creep and lane_steer is not None and math.isfinite(lane_steer):  # creep closed-loop on what is seen of the lane
+                wanted = lane_steer
+                reasons.append(f"creep steering by the lane geometry seen now: {lane_steer:+.1f} deg")
+            status = "" if creep else recovery_status(st.recovery, eligible, cfg, t, seen)
+            reasons.extend([status] if status and strategy is Strategy.STOP else [])
+        else:
+            st.recovery = Recovery()  # a new EMERGENCY starts with the full re-acquisition budget
+            if road_calm:
+                st.trusted_steering_deg = wanted  # the road picture is calm: remember its steering (held if it is lost)
+        out_steering = self._steer_out(wanted, dt, reasons)
+        lateral = lateral_speed_mps(max(abs(steering), abs(out_steering)), v)
+        caps.append(lateral)
         if imminent:
-            reasons.append(f"imminent collision: obstacle at {range_m:.2f} m, cannot stop from {speed_now:.2f} m/s")
+            reasons.append(f"imminent collision: obstacle at {range_m:.2f} m, no braking within "
+                           f"{v.max_decel_mps2:.1f} m/s² avoids it from {speed_now:.2f} m/s")
+        elif envelope < speed_now and math.isfinite(range_m):
+            reasons.append(f"proper response: inside the safe distance of the object at {range_m:.2f} m "
+                           f"(its speed {lead_speed_mps(speed, closing):.2f} m/s): braking to {envelope:.2f} m/s")
         if event:
             reasons.append(event)
-        dt = 0.0 if st.last_t_s is None else t - st.last_t_s
+        target = min(caps)
         previous = st.limit_mps if st.limit_mps is not None else min(speed_now if speed is not None else 0.0, v.max_speed_mps)
         limit = max(0.0, rate_limited_mps(previous, target, dt, cfg))
         st.last_t_s, st.limit_mps = t, limit
-        reasons.append(self._limit_reason(limit, fear_limit, envelope, target, range_m))
+        reasons.append(self._limit_reason(limit, fear_limit, envelope, target, seen_m, lateral))
         if result.level > FearLevel.VERY_LOW or mode is not Mode.NORMAL:
             reasons.extend(f"rule {text!r} fired {s:.2f}" for text, s in result.top_rules(TOP_RULES_IN_REASONS))
             reasons.extend(perceived.facts if perceived is not None else ())
@@ -201,8 +301,57 @@ class FearGuard:
         return Command(
             steering_deg=out_steering, speed_limit_mps=limit, mode=mode, strategy=strategy, fear=result.fear,
             fear_level=result.level, cues=cues, reasons=tuple(reasons), fear_limit_mps=fear_limit, envelope_mps=envelope,
-            cause=result.dominant_cause, perceived=perceived,
+            cause=result.dominant_cause, perceived=perceived, closing_speed_mps=math.nan if closing is None else closing,
         )
+
+    def _lane_seen(self, cues: Cues, perceived: Perceived | None) -> bool:
+        """Something of the lane is seen (a creep can re-acquire it), or the camera froze (only moving tells a frozen
+        camera from a still world)."""
+        confidence = finite_reading(cues.lane_confidence)
+        if confidence is not None and confidence >= self.rules.policy.recovery_min_confidence:
+            return True
+        return perceived is not None and any(a.startswith("camera: frozen") for a in perceived.alerts)
+
+    def _steer_out(self, wanted: float, dt: float, reasons: list[str]) -> float:
+        """The steering answered: within ±max, and the smallest change from the last answer the rate limit allows."""
+        st, v = self._state, self.vehicle
+        wanted = min(max(wanted, -v.max_steering_deg), v.max_steering_deg)
+        out = rate_limited_steering_deg(st.out_steering_deg, wanted, dt, v)
+        if out != wanted:
+            reasons.append(f"steering rate limit {v.max_steering_rate_dps:.0f} deg/s: {out:+.1f} deg toward {wanted:+.1f} deg")
+        st.out_steering_deg = out
+        return out
+
+    def _closing_speed(self, obs: Observation, t: float, range_m: float, perceived: Perceived | None) -> float | None:
+        """How fast the obstacle comes closer (m/s, + = closing): given, from the range filter, or from successive ranges.
+
+        None when unknown (the envelope then treats the obstacle as standing). Never more opening than the
+        vehicle's closing-speed bound: a garbage rate cannot buy a larger envelope.
+        """
+        st, bound = self._state, self.vehicle.max_closing_speed_mps
+        if not math.isfinite(range_m):
+            st.ranges.clear()
+            return None
+        st.ranges.append((t, range_m))
+        given = finite_reading(getattr(obs, "range_rate_mps", None))
+        estimate = perceived.range_estimate if perceived is not None else None
+        if given is not None:
+            closing: float | None = -given
+        elif estimate is not None and math.isfinite(estimate.closing_speed_mps):
+            closing = estimate.closing_speed_mps
+        else:
+            closing = closing_speed_from_ranges(st.ranges, t, self.vehicle.lead_max_decel_mps2)
+        return None if closing is None else max(closing, -bound)
+
+    def _lane_check(self, perceived: Perceived | None, steering: float, speed_now: float) -> LaneCheck | None:
+        """The lane-keeping plausibility check on this frame's ground-plane lane (frames with a camera model only)."""
+        analysis = perceived.analysis if perceived is not None else None
+        if analysis is None:
+            return None
+        geometry = lane_geometry(analysis.left, analysis.right, analysis.region, analysis.scale, self.camera,
+                                 analysis.steering_deg)
+        cfg = self.rules.policy
+        return lane_check(geometry, steering, speed_now, self.vehicle, cfg.lane_check_lookahead_s, cfg.lane_check_min_deg)
 
     @staticmethod
     def _range_for_policy(cues: Cues) -> float:
@@ -210,11 +359,13 @@ class FearGuard:
         return worst_filled(cues.values(), 0.0)[0][OBSTACLE_RANGE]
 
     @staticmethod
-    def _limit_reason(limit: float, fear_limit: float, envelope: float, target: float, range_m: float) -> str:
+    def _limit_reason(limit: float, fear_limit: float, envelope: float, target: float, range_m: float, lateral: float) -> str:
         if limit < target - 1e-12:
             return f"speed limit {limit:.2f} m/s: rising at the comfort acceleration toward {target:.2f} m/s"
         if envelope <= fear_limit and envelope <= target + 1e-12 and not math.isinf(envelope):
-            return f"speed limit {limit:.2f} m/s: stopping envelope for an obstacle at {range_m:.2f} m"
+            return f"speed limit {limit:.2f} m/s: safe distance envelope for an obstacle at {range_m:.2f} m"
+        if lateral <= target + 1e-12:
+            return f"speed limit {limit:.2f} m/s: lateral acceleration at this steering angle"
         if fear_limit <= target + 1e-12:
             return f"speed limit {limit:.2f} m/s: set by fear"
         return f"speed limit {limit:.2f} m/s: set by the emergency strategy"
@@ -226,6 +377,7 @@ class FearGuard:
     ) -> Command:
         """EMERGENCY/STOP at once, steering held at the last trusted angle; the clock restarts at t."""
         st = self._state
+        prev_t = st.last_t_s
         if t is not None:
             st.mode, _ = next_mode(st.mode, 1.0, t, at_once=True, cfg=self.rules.policy, fault=True)
             st.last_t_s = t
@@ -235,8 +387,10 @@ class FearGuard:
         cues = cues if cues is not None else Cues(*([math.nan] * len(CUE_NAMES)))
         fear = result.fear if result is not None else 1.0
         level = result.level if result is not None else FearLevel.VERY_HIGH
-        held = max(-self.vehicle.max_steering_deg, min(self.vehicle.max_steering_deg, st.trusted_steering_deg))
-        reasons = (why, f"EMERGENCY STOP: fault, holding {held:+.1f} deg")
+        dt = 0.0 if t is None or prev_t is None else t - prev_t
+        extra: list[str] = []
+        held = self._steer_out(st.trusted_steering_deg, dt, extra)
+        reasons = (why, f"EMERGENCY STOP: fault, holding {held:+.1f} deg", *extra)
         return Command(
             steering_deg=held, speed_limit_mps=0.0, mode=Mode.EMERGENCY, strategy=Strategy.STOP, fear=fear, fear_level=level,
             cues=cues, reasons=reasons, fear_limit_mps=0.0, envelope_mps=0.0, perceived=perceived,

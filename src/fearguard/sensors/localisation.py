@@ -242,21 +242,28 @@ class QrLocaliser:
         self._candidate: _Fix | None = None  # a rejected marker waiting for a second one to confirm a re-localisation
         self._route: str | None = self.route
         self._last = NEVER
+        self._odo_m: float | None = None  # last odometer reading, dead-reckoned while readings are missing
 
     @property
     def state(self) -> LocalisationState:
         """The result of the latest update."""
         return self._last
 
-    def update(self, t_s: float, payloads: Sequence[str], odometer_m: float | None) -> LocalisationState:
-        """Read this frame's payloads at time ``t_s`` with the odometer (m, None/NaN if unknown). Never raises."""
+    def update(
+        self, t_s: float, payloads: Sequence[str], odometer_m: float | None, speed_mps: float | None = None
+    ) -> LocalisationState:
+        """Read this frame's payloads at time ``t_s`` with the odometer (m, None/NaN if unknown). Never raises.
+
+        A missing odometer reading after a known one is dead-reckoned: the last reading plus the speed
+        integrated since (``speed_mps``, m/s), so a copy of the last board cannot pass as "not moved".
+        """
         t = finite_reading(t_s)
         if t is None or (self._t_s is not None and t < self._t_s):
             why = f"time {t_s!r} is not a number" if t is None else f"time {t:.3f} s runs backwards (last {self._t_s:.3f} s)"
             self._last = replace(self._last, reasons=(f"{why}: QR payloads ignored", *self._summary(self._last)))
             return self._last
+        odo = self._odometer(t, finite_reading(odometer_m), finite_reading(speed_mps))
         self._t_s = t
-        odo = finite_reading(odometer_m)
         reasons: list[str] = []
         accepted = [m for m in _markers(payloads, reasons) if self._accept(m, t, odo, reasons)]
         if accepted:
@@ -271,6 +278,14 @@ class QrLocaliser:
         return self._last
 
     # -- steps of an update ------------------------------------------------------------------------
+    def _odometer(self, t: float, odo: float | None, speed: float | None) -> float | None:
+        """The odometer now: the reading, else the last reading dead-reckoned with the speed (None if never read)."""
+        if odo is not None:
+            self._odo_m = odo
+        elif self._odo_m is not None and speed is not None and speed > 0 and self._t_s is not None:
+            self._odo_m += speed * (t - self._t_s)
+        return self._odo_m
+
     def _check(self, marker: TrackMarker, ref: _Fix | None, t: float, odo: float | None) -> str | None:
         since = None if ref is None or ref.odometer_m is None or odo is None else odo - ref.odometer_m
         elapsed = None if ref is None else t - ref.t_s

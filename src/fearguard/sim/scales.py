@@ -39,6 +39,9 @@ _MODEL: dict[str, dict[str, Any]] = {
         "max_accel_mps2": 2.0,  # [m/s²] what the motor can do
         "max_brake_mps2": 4.0,  # [m/s²] what the brakes can do (above max_decel_mps2: margin)
         "max_steering_rate_dps": 360.0,  # [deg/s] hobby servo, ~0.17 s per 60°
+        "max_lateral_accel_mps2": 4.0,  # [m/s²] VehicleLimits: rubber tyres on a smooth floor (docs/vehicles.md)
+        "lead_max_decel_mps2": 4.0,  # [m/s²] VehicleLimits: hardest braking assumed of a car ahead (its brakes)
+        "max_closing_speed_mps": 3.0,  # [m/s] VehicleLimits: range filter's bound (model car <= 2 m/s)
     },
     "road": {
         "lane_width_m": 0.45,  # [m] taped track lane (13 cm each side of a 0.19 m car)
@@ -97,6 +100,9 @@ _ROAD: dict[str, dict[str, Any]] = {
         "max_accel_mps2": 3.0,  # [m/s²]
         "max_brake_mps2": 9.0,  # [m/s²] emergency braking on dry asphalt
         "max_steering_rate_dps": 60.0,  # [deg/s] road-wheel rate
+        "max_lateral_accel_mps2": 3.0,  # [m/s²] VehicleLimits: ISO 11270 / openpilot lateral limit
+        "lead_max_decel_mps2": 8.0,  # [m/s²] VehicleLimits: RSS's assumed hardest braking of the car ahead
+        "max_closing_speed_mps": 45.0,  # [m/s] VehicleLimits: range filter's bound (1.5 x max speed)
     },
     "road": {
         "lane_width_m": 3.5,  # [m]

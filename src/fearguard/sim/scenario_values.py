@@ -64,12 +64,19 @@ class VehicleProfile:
     max_accel_mps2: float
     max_brake_mps2: float
     max_steering_rate_dps: float
+    max_lateral_accel_mps2: float
+    lead_max_decel_mps2: float
+    max_closing_speed_mps: float
 
     @property
     def limits(self) -> VehicleLimits:
         """The supervisor's view of this car."""
-        return VehicleLimits(self.max_speed_mps, self.max_decel_mps2, self.reaction_time_s, self.stop_margin_m,
-                             self.max_steering_deg, self.has_ultrasonic, self.has_qr_localisation)
+        return VehicleLimits(
+            self.max_speed_mps, self.max_decel_mps2, self.reaction_time_s, self.stop_margin_m, self.max_steering_deg,
+            self.has_ultrasonic, self.has_qr_localisation, wheelbase_m=self.wheelbase_m, width_m=self.width_m,
+            max_lateral_accel_mps2=self.max_lateral_accel_mps2, max_steering_rate_dps=self.max_steering_rate_dps,
+            lead_max_decel_mps2=self.lead_max_decel_mps2, max_closing_speed_mps=self.max_closing_speed_mps,
+        )
 
     @property
     def rear_overhang_m(self) -> float:

@@ -1,0 +1,102 @@
+"""The lane-keeping plausibility check: will the wrapped steering take the car over a lane boundary soon?
+
+A policy check beside the fuzzy fear (like the imminent-collision check; the five cues stay five). Input
+is the ego lane in metres on the ground, as perception measures it with a camera model: each boundary a
+straight ground line y = y0 + slope·x in vehicle axes (x forward from the camera, y left), over the
+stretch the camera sees. The car's path under a constant steering angle δ is an arc of curvature
+tan δ / L (bicycle model): y(x) ≈ x²·tan δ / (2L). At the look-ahead distance x = v·T (the time to line
+crossing T, clamped to what the camera sees) the car's side must stay inside the boundaries. Only a
+steering that crosses a boundary *and* points at least ``min_deg`` more toward it than the lane geometry's
+own steering is overridden: the lane geometry is the reference, so its own model errors never trigger it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from fearguard.vehicle import VehicleLimits
+
+
+@dataclass(frozen=True)
+class GroundLine:
+    """A lane boundary on the ground: lateral offset y = y0 + slope·x (m, + = left), x forward (m)."""
+
+    y0_m: float
+    slope: float
+
+    def y_at(self, x_m: float) -> float:
+        return self.y0_m + self.slope * x_m
+
+
+@dataclass(frozen=True)
+class LaneGeometry:
+    """The ego lane in metres: the boundaries seen (None = not seen), the seen stretch, the lane's own steering."""
+
+    left: GroundLine | None
+    right: GroundLine | None
+    near_m: float  # [m] closest ground distance the boundaries were measured at
+    far_m: float  # [m] farthest
+    steering_deg: float | None  # the lane geometry's steering (the baseline estimator), None if unknown
+
+    @property
+    def offset_m(self) -> float | None:
+        """Lateral offset of the lane centre at the near distance (m, + = the centre is left of the camera)."""
+        if self.left is None or self.right is None:
+            return None
+        return 0.5 * (self.left.y_at(self.near_m) + self.right.y_at(self.near_m))
+
+    @property
+    def heading_deg(self) -> float | None:
+        """Heading of the lane relative to the car (deg, + = the lane turns away to the left)."""
+        lines = [b for b in (self.left, self.right) if b is not None]
+        if not lines:
+            return None
+        return math.degrees(math.atan(sum(b.slope for b in lines) / len(lines)))
+
+
+@dataclass(frozen=True)
+class LaneCheck:
+    """The check's verdict: ``crossing`` "left"/"right" or "" and, when overriding, the steering to use."""
+
+    crossing: str
+    distance_m: float
+    override_deg: float | None
+    why: str
+
+
+def path_offset_m(steering_deg: float, distance_m: float, vehicle: VehicleLimits) -> float:
+    """Lateral position of the car after ``distance_m`` on a constant steering angle (m, + = left)."""
+    return distance_m * distance_m * math.tan(math.radians(steering_deg)) / (2.0 * vehicle.wheelbase_m)
+
+
+def crossing_side(geometry: LaneGeometry, steering_deg: float, distance_m: float, vehicle: VehicleLimits) -> str:
+    """Which boundary the car's side crosses at ``distance_m`` on this steering ("left", "right" or "")."""
+    y = path_offset_m(steering_deg, distance_m, vehicle)
+    half = vehicle.width_m / 2.0
+    if geometry.left is not None and y + half > geometry.left.y_at(distance_m):
+        return "left"
+    if geometry.right is not None and y - half < geometry.right.y_at(distance_m):
+        return "right"
+    return ""
+
+
+def lane_check(
+    geometry: LaneGeometry | None, steering_deg: float, speed_mps: float, vehicle: VehicleLimits,
+    lookahead_s: float, min_deg: float,
+) -> LaneCheck | None:
+    """None when nothing can be checked (no lane geometry, no reference steering, not moving)."""
+    if geometry is None or geometry.steering_deg is None or not math.isfinite(geometry.steering_deg):
+        return None
+    if not (geometry.far_m > geometry.near_m > 0.0) or speed_mps <= 0.0:
+        return None
+    distance = min(max(speed_mps * lookahead_s, geometry.near_m), geometry.far_m)
+    side = crossing_side(geometry, steering_deg, distance, vehicle)
+    lane = geometry.steering_deg
+    toward = steering_deg - lane if side == "left" else lane - steering_deg
+    if not side or toward < min_deg:
+        return LaneCheck("", distance, None, "")
+    why = (f"lane check: steering {steering_deg:+.1f} deg crosses the {side} boundary within {distance:.2f} m "
+           f"({lookahead_s:.1f} s ahead), {toward:.1f} deg more toward it than the lane geometry: "
+           f"steering by the lane geometry {lane:+.1f} deg")
+    return LaneCheck(side, distance, lane, why)

@@ -1,0 +1,87 @@
+"""Cue-level car following with a road car: the lead's speed is known only from successive range readings.
+
+Road car (VehicleLimits.preset("road_car")): max 30 m/s, braking 6 m/s², reaction 0.5 s, margin 1 m, a
+forward range sensor 0.3-80 m; rules/road_car.toml. The ego either drives a given speed (the limit is
+only read) or obeys the limit with realistic braking: it follows the limit of one reaction time ago,
+accelerating at most 1.5 m/s² and braking at most its 6 m/s².
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import pytest
+
+import fearguard as fg
+
+ROAD = fg.VehicleLimits.preset("road_car")
+RULES = fg.load_rules("rules/road_car.toml")
+DT = 0.05  # [s] a 20 Hz loop
+ACCEL = 1.5  # [m/s²] the ego's gentle acceleration toward its target
+
+
+def sensed(gap_m: float) -> float:
+    """What the range sensor reports: inf beyond its 80 m (nothing in range)."""
+    return gap_m if gap_m < ROAD.ultrasonic_max_range_m else math.inf
+
+
+def cues(gap_m: float) -> fg.Cues:
+    return fg.Cues(0.9, 120.0, 0.0, sensed(gap_m), 0.0)
+
+
+def test_a_lead_at_a_constant_40_m_gap_is_followed_at_25_mps() -> None:
+    guard = fg.FearGuard(lambda f: 0.0, rules=RULES, vehicle=ROAD)
+    cmds, t = [], 0.0
+    for k in range(int(40 / DT)):
+        t = k * DT
+        gap = 80.0 - 2.5 * t if t < 16.0 else 40.0  # first seen at the sensor's 80 m, then a constant 40 m gap
+        cmds.append((t, guard.step(fg.Observation(t_s=t, speed_mps=25.0, cues=cues(gap)))))
+    assert all(c.mode is not fg.Mode.EMERGENCY for _, c in cmds)
+    following = [c for t, c in cmds if t >= 18.0]
+    assert min(c.speed_limit_mps for c in following) >= 23.0
+    # the lead's speed from the ranges: 25 m/s, less what it may have braked since the estimate's mid-window (0.15 s)
+    assert all(c.closing_speed_mps == pytest.approx(ROAD.lead_max_decel_mps2 * 0.15) for c in following)
+
+
+def closed_loop(lead_speed, gap0_m: float, ego0_mps: float, cruise_mps: float, seconds: float = 40.0):
+    """The ego obeys the limit with realistic braking; ``lead_speed(t, v_lead)`` → the lead's speed. Returns the run."""
+    guard = fg.FearGuard(lambda f: 0.0, rules=RULES, vehicle=ROAD)
+    delay = deque([min(ego0_mps, cruise_mps)] * round(ROAD.reaction_time_s / DT), maxlen=round(ROAD.reaction_time_s / DT))
+    gap, v, v_lead, t = gap0_m, ego0_mps, lead_speed(0.0, None), 0.0
+    rows = []
+    while t < seconds:
+        cmd = guard.step(fg.Observation(t_s=round(t, 6), speed_mps=v, cues=cues(gap)))
+        rows.append((t, gap, v, v_lead, cmd))
+        target = min(cruise_mps, delay[0])  # the limit of one reaction time ago
+        delay.append(cmd.speed_limit_mps)
+        v = max(target, v - ROAD.max_decel_mps2 * DT) if target < v else min(target, v + ACCEL * DT)
+        v_lead = lead_speed(t, v_lead)
+        gap += (v_lead - v) * DT
+        t += DT
+        if gap <= 0.0:
+            break
+    return rows
+
+
+def braking_lead(t: float, v: float | None) -> float:
+    """First seen at 80 m doing 15 m/s, speeds up to 20 m/s (a steady 30 m gap from t = 20 s), brakes at 6 m/s² at 23 s."""
+    if t < 23.0:
+        return 15.0 + 5.0 * min(t, 20.0) / 20.0
+    return max(0.0, (20.0 if v is None else v) - 6.0 * DT)
+
+
+@pytest.mark.parametrize(
+    ("name", "lead_speed", "gap0", "ego0", "cruise"),
+    [
+        ("lead brakes at 6 m/s² from 20 m/s at 30 m", braking_lead, 80.0, 20.0, 20.0),
+        ("standing obstacle approached at 25 m/s", lambda t, v: 0.0, 100.0, 25.0, 25.0),
+        ("CCRm-like, 50 vs 20 km/h", lambda t, v: 20 / 3.6, 100.0, 50 / 3.6, 50 / 3.6),
+    ],
+)
+def test_no_contact_when_the_ego_obeys_the_limit(name, lead_speed, gap0, ego0, cruise) -> None:
+    rows = closed_loop(lead_speed, gap0, ego0, cruise)
+    assert min(gap for _, gap, *_ in rows) > 0.0, f"{name}: contact"
+    if lead_speed is braking_lead:  # the steady 30 m gap at 20 m/s was followed, not stopped for
+        steady = [cmd for t, gap, v, _, cmd in rows if 20.5 <= t < 23.0]
+        assert steady and all(c.mode is not fg.Mode.EMERGENCY and c.speed_limit_mps >= 20.0 for c in steady)
