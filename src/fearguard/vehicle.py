@@ -111,8 +111,9 @@ PRESETS: MappingProxyType[str, VehicleLimits] = MappingProxyType({
                          has_ultrasonic=True, has_qr_localisation=True, ultrasonic_min_range_m=0.2,
                          ultrasonic_max_range_m=6.0, wheelbase_m=1.6, width_m=1.2, max_lateral_accel_mps2=2.0,
                          max_steering_rate_dps=90.0, lead_max_decel_mps2=3.0, max_closing_speed_mps=4.5),
-    # a 1:20 Duckiebot-class differential-drive robot, 0.2-0.6 m/s, camera only; wheelbase = axle to caster
-    "duckiebot": replace(_DEFAULT, max_speed_mps=0.6, max_decel_mps2=1.5, reaction_time_s=0.2, stop_margin_m=0.1,
+    # a 1:20 Duckiebot-class differential-drive robot, 0.2-0.5 m/s, camera only; wheelbase = axle to caster; speed,
+    # braking and delay as measured in gym-duckietown (worlds/duckietown/preset.py: 0.15 s delay + 0.2 s speed lag)
+    "duckiebot": replace(_DEFAULT, max_speed_mps=0.5, max_decel_mps2=0.5, reaction_time_s=0.35, stop_margin_m=0.05,
                          max_steering_deg=45.0, wheelbase_m=0.1, width_m=0.13, max_lateral_accel_mps2=1.5,
                          max_steering_rate_dps=360.0, lead_max_decel_mps2=1.5, max_closing_speed_mps=1.0),
     # a full-size road car: forward radar 0.3-80 m, 30 m/s, ISO 11270 / openpilot lateral limit 3 m/s²

@@ -186,15 +186,7 @@ def check_safe_distance(subject: Subject, case: Case) -> str | None:
                     f"{car.stop_margin_m:g} m{ahead}); {_cmd_text(cmd)}")
         return None
 
-    for _, history in case.runs:
-        r = run(subject, history)
-        if r.raised:
-            return _broken(r)
-        for i, (step, cmd) in enumerate(zip(history, r.commands, strict=True)):
-            why = judge(cmd, step.speed_mps)
-            if why:
-                return f"frame {i}: {why}"
-    return None
+    return _first_bad_frame(subject, case, judge)
 
 
 def _safe_distance_cases(subject: Subject) -> st.SearchStrategy[Case]:
@@ -642,8 +634,8 @@ def _recovery_cases(subject: Subject) -> st.SearchStrategy[Case]:
     @st.composite
     def standstill(draw: Any) -> Case:
         kind = draw(kinds)
-        # the road picture lost while something of the lane is still seen (a creep can re-acquire it)
-        lost = replace(fs.best_cues(rb), lane_confidence=rb.policy.recovery_min_confidence, occlusion=1.0)
+        # the road picture lost while something of the lane is still seen (a creep can re-acquire it; blind, it cannot)
+        lost = replace(fs.best_cues(rb), lane_confidence=getattr(rb.policy, "recovery_min_confidence", 0.0), occlusion=1.0)
         if kind == "obstacle":
             lost = replace(lost, obstacle_range_m=draw(near))
         dt = draw(st.sampled_from(STEADY_DT_S))
@@ -830,8 +822,7 @@ INVARIANTS: tuple[Invariant, ...] = (
     Invariant("1", "limits_in_range", "limits in range",
               "0 ≤ speed_limit_mps ≤ max_speed_mps; fear in [0, 1]; steering within ±max_steering_deg",
               lambda s: _drives(s), check_limits_in_range, prefix_closed=True),
-    Invariant("2", "safe_distance", "safe distance",
-              "v·t_r + v²/(2·a) ≤ max(0, d − margin + v_f²/(2·b)) for v = the speed limit (RSS; v_f = 0: a standing obstacle)",
+    Invariant("2", "safe_distance", "safe distance", "v·t_r + v²/(2·a) ≤ max(0, d − margin) for v = the speed limit",
               _safe_distance_cases, check_safe_distance, prefix_closed=True),
     Invariant("3", "monotone", "monotone in each cue" + (" and closing speed" if HAS_RANGE_RATE else ""),
               "a cue getting worse never lowers fear nor raises the speed limit; a faster closing speed never raises it",
