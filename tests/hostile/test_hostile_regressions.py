@@ -84,7 +84,9 @@ very_high = { trimf = [-0.25, 0.0, 0.0] }"""
 
 def test_a_fear_universe_other_than_0_to_1_is_refused(write_rules) -> None:
     path = write_rules((FEAR_BLOCK, SHIFTED_FEAR_BLOCK))  # the campaign's file: loaded, checked OK, never EMERGENCY
-    with pytest.raises(fg.RuleError, match=r"line 46, key fear\.universe: the fear universe must be \[0\.0, 1\.0"):
+    lines = path.read_text().splitlines()
+    line = 1 + next(i for i, text in enumerate(lines) if text.startswith("universe") and i > 0 and lines[i - 1].startswith("[fear]"))
+    with pytest.raises(fg.RuleError, match=rf"line {line}, key fear\.universe: the fear universe must be \[0\.0, 1\.0"):
         fg.load_rules(path)
     assert main(["rules", "check", str(path)]) == 2
 
