@@ -42,10 +42,6 @@ class Strategy(Enum):
     CRAWL = "CRAWL"
 
 
-def _finite(value: object) -> bool:
-    return finite_reading(value) is not None
-
-
 @dataclass(frozen=True)
 class PolicyConfig:
     """The policy numbers of a rule file's ``[policy]`` table (defaults: a 1:10 model car)."""

@@ -150,7 +150,7 @@ class FearGuard:
         cues, cue_notes, perceived, lead = self._cues(obs)
         result = self.rules.evaluate(cues)
         steering, steer_fault = self._steering(obs, perceived)
-        fault = stall or steer_fault or self._oscillation(steering if not steer_fault else None)
+        fault = stall or steer_fault or self._oscillation(steering)
         if fault:
             return self._fault_command(obs, fault, t, cues, result, perceived)
         return self._decide(obs, t, cues, result, steering, cue_notes, lead, perceived)
@@ -167,12 +167,9 @@ class FearGuard:
         st.periods_s.append(gap)
         return ""
 
-    def _oscillation(self, steering: float | None) -> str:
+    def _oscillation(self, steering: float) -> str:
         """An estimator flipping between large angles of opposite sign frame after frame is a fault."""
         st, cfg = self._state, self.rules.policy
-        if steering is None:
-            st.raw_steering.clear()
-            return ""
         st.raw_steering.append(steering)
         while len(st.raw_steering) > cfg.oscillation_flips + 1:
             st.raw_steering.popleft()

@@ -85,3 +85,9 @@ def test_no_contact_when_the_ego_obeys_the_limit(name, lead_speed, gap0, ego0, c
     if lead_speed is braking_lead:  # the steady 30 m gap at 20 m/s was followed, not stopped for
         steady = [cmd for t, gap, v, _, cmd in rows if 20.5 <= t < 23.0]
         assert steady and all(c.mode is not fg.Mode.EMERGENCY and c.speed_limit_mps >= 20.0 for c in steady)
+
+
+def test_ranges_all_at_one_instant_give_no_closing_speed() -> None:
+    from fearguard.policy import closing_speed_from_ranges
+
+    assert closing_speed_from_ranges([(1.0, 5.0), (1.0, 4.0)], 1.0) is None
