@@ -596,6 +596,8 @@ def check_recovery_is_live(subject: Subject, case: Case) -> str | None:
     if r.raised:
         return _broken(r)
     kind = case.params.get("kind")
+    if kind == "fault" and not any(isinstance(a, SteerRaises) for a in r.steering_in):
+        kind = "road_lost"  # the subject's own steering function answered: the scripted fault did not happen
     creeps = [i for i, c in enumerate(r.commands) if c.mode is fg.Mode.EMERGENCY and c.speed_limit_mps > 0.0]
     if kind == "road_lost" and not creeps:
         return f"the road picture is lost, range clear, car standing: still {_cmd_text(r.commands[-1])} after {history[-1].t_s:.4g} s"
@@ -628,7 +630,8 @@ def _runs_of(indices: Sequence[int]) -> list[tuple[int, int]]:
 def _recovery_cases(subject: Subject) -> st.SearchStrategy[Case]:
     rb, car = subject.rules, subject.vehicle
 
-    kinds = st.sampled_from(["road_lost", "obstacle", "fault"] if car.has_ultrasonic else ["road_lost", "fault"])
+    scripted = ["fault"] if subject.steer is None else []  # a fault can be scripted only for the scripted steering
+    kinds = st.sampled_from(["road_lost", *(["obstacle"] if car.has_ultrasonic else []), *scripted])
     near = st.floats(car.stop_margin_m, max(car.stop_margin_m, 0.5 * car.ultrasonic_max_range_m))
 
     @st.composite

@@ -43,6 +43,7 @@ class Subject:
            steer: Callable[[Any], Any] | str | None = None) -> Subject:
         rb = rules if isinstance(rules, fg.RuleBase) else fg.load_rules(rules)
         car, car_name = resolve_vehicle(vehicle)
+        check_honourable(car, car_name)
         fn, fn_name = resolve_steer(steer)
         return cls(rb, car, fn, car_name, fn_name)
 
@@ -87,6 +88,27 @@ def vehicle_from_mapping(data: dict[str, Any], where: str) -> fg.VehicleLimits:
         return fg.VehicleLimits(**values)
     except (ValueError, TypeError) as exc:
         raise SetupError(f"{where}: {exc}") from None
+
+
+TYRE_GRIP_MPS2 = 9.81  # [m/s²] μ = 1 on dry asphalt: the hardest braking tyres deliver without aerodynamic downforce
+
+
+def check_honourable(car: fg.VehicleLimits, where: str) -> None:
+    """Reject a vehicle whose stated numbers the stopping envelope cannot honour: braking beyond tyre grip
+    (the envelope would plan stops the car cannot make), a stop margin the range sensor cannot see past (it
+    could never move), a range filter slower than the car itself (its own approach would read as noise)."""
+    if car.max_decel_mps2 > TYRE_GRIP_MPS2:
+        raise SetupError(f"vehicle {where}: max_decel_mps2 = {car.max_decel_mps2:g} m/s² is more than tyres deliver "
+                         f"(≈ {TYRE_GRIP_MPS2:g} m/s², μ = 1): the envelope would plan stops this car cannot make; "
+                         "state the braking measured on the car")
+    if not car.has_ultrasonic:
+        return
+    if car.stop_margin_m >= car.ultrasonic_max_range_m:
+        raise SetupError(f"vehicle {where}: stop_margin_m = {car.stop_margin_m:g} m is not inside the range sensor's "
+                         f"{car.ultrasonic_max_range_m:g} m: the envelope could never let it move")
+    if car.max_closing_speed_mps < car.max_speed_mps:
+        raise SetupError(f"vehicle {where}: max_closing_speed_mps = {car.max_closing_speed_mps:g} m/s is below its own top "
+                         f"speed {car.max_speed_mps:g} m/s: the range filter would reject its approach to a standing obstacle")
 
 
 def resolve_vehicle(vehicle: fg.VehicleLimits | str | Path | None) -> tuple[fg.VehicleLimits, str]:

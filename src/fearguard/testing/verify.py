@@ -44,7 +44,9 @@ class Counterexample:
         out = [f"invariant {self.invariant.number} ({self.invariant.title}) fails: {self.message}"]
         if self.case.note:
             out.append(f"case: {self.case.note}")
-        cmds = self.commands()
+        runs = {name: run(self.subject, history) for name, history in self.case.runs}
+        cmds = {name: list(r.commands) for name, r in runs.items()}
+        scripted = self.subject.steer is None  # else the subject's own function answered: show what it said
         for name, history in self.case.runs:
             out.append(f"run {name!r}, {len(history)} frame(s):")
             half = max(1, max_frames // 2)
@@ -52,7 +54,9 @@ class Counterexample:
             for i in shown:
                 if len(history) > max_frames and i == len(history) - half:
                     out.append(f"  ... {len(history) - 2 * half} frame(s) like these (all in the file) ...")
-                out.append(_frame_text(i, history[i], cmds[name][i] if i < len(cmds[name]) else None))
+                answered = runs[name].steering_in
+                answer = history[i].steer_output if scripted or i >= len(answered) else answered[i]
+                out.append(_frame_text(i, history[i], cmds[name][i] if i < len(cmds[name]) else None, answer))
         return "\n".join(out)
 
     def save(self, path: str | Path) -> Path:
@@ -61,7 +65,7 @@ class Counterexample:
         return save_case(path, self.case, header, self.commands())
 
 
-def _frame_text(i: int, step: Any, c: fg.Command | None) -> str:
+def _frame_text(i: int, step: Any, c: fg.Command | None, answer: Any) -> str:
     obs = f"t={step.t_s!r} v={step.speed_mps!r}"
     if step.cues is not None:
         obs += " cues=(" + ", ".join(repr(getattr(step.cues, n)) for n in fg.CUE_NAMES) + ")"
@@ -70,7 +74,7 @@ def _frame_text(i: int, step: Any, c: fg.Command | None) -> str:
     for fname in ("ultrasonic_range_m", "odometer_m", "qr_payload", "lead"):
         if getattr(step, fname) is not None:
             obs += f" {fname}={getattr(step, fname)!r}"
-    obs += f" steer→{step.steer_output!r}"
+    obs += f" steer→{answer!r}"
     res = f"{c.mode.name} {c.strategy.name} limit {c.speed_limit_mps:.4g} steer {c.steering_deg:+.4g} fear {c.fear:.3g}" if c else "-"
     return f"  {i:>3} {obs}\n      ⇒ {res}"
 
