@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
 from fearguard.errors import FearguardError
+from fearguard.reader import Table, TomlSource, read_toml
 
 ROUTE_NAME = re.compile(r"[A-Za-z0-9_-]+")  # the QR payload's route name (sensors/localisation.py)
 LOCALISER_SPEED_MARGIN = 1.2  # [-] without odometer a QR fix may move at most 1.2 × max speed since the last one
@@ -133,36 +133,29 @@ class VehicleFileError(FearguardError):
 
 
 def load_vehicle(path: str | Path) -> VehicleLimits:
-    """Read a vehicle.toml: optional ``preset = "NAME"``, then any VehicleLimits keys (SI units in the names)."""
-    p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise VehicleFileError(p, "file", f"cannot read it ({exc.strerror or exc})") from None
-    except UnicodeDecodeError as exc:
-        raise VehicleFileError(p, "file", f"not UTF-8 text ({exc.reason})") from None
-    except (tomllib.TOMLDecodeError, RecursionError) as exc:
-        raise VehicleFileError(p, "TOML", str(exc) if not isinstance(exc, RecursionError) else "nested too deeply") from None
-    return vehicle_from_table(data, p)
+    """Read a vehicle.toml: optional ``preset = "NAME"``, then any VehicleLimits keys (SI units in the names).
+
+    Read by the one strict reader (reader.py): bounded, unknown keys rejected with "did you mean",
+    every error naming the file, the line and the key."""
+    data, src = read_toml(path, VehicleFileError, f"give a preset ({', '.join(PRESETS)}) or a vehicle.toml path")
+    return vehicle_from_table(data, path, src)
 
 
-def vehicle_from_table(data: dict[str, Any], path: str | Path) -> VehicleLimits:
-    """Validate a vehicle table (as read from TOML); errors name the file and the key."""
+def vehicle_from_table(data: dict[str, Any], path: str | Path, src: TomlSource | None = None) -> VehicleLimits:
+    """Validate a vehicle table (as read from TOML); errors name the file, the key and (with ``src``) its line."""
     known = {f.name: f for f in fields(VehicleLimits)}
-    base_name = data.get("preset", "camera_only")
-    if not isinstance(base_name, str) or base_name not in PRESETS:
-        raise VehicleFileError(path, "key preset", f"must be one of {', '.join(PRESETS)}, got {base_name!r}")
+    table = Table(src or TomlSource(path, "", VehicleFileError), data, "", ("preset", *known))
+    base_name = table.string("preset", "camera_only", choices=tuple(PRESETS))
     values: dict[str, Any] = {}
-    for key, value in data.items():
+    for key in data:
         if key == "preset":
             continue
-        if key not in known:
-            raise VehicleFileError(path, f"key {key}", f"unknown key; known keys: preset, {', '.join(known)}")
-        if known[key].type == "bool" and not isinstance(value, bool):
-            raise VehicleFileError(path, f"key {key}", f"must be true or false, got {value!r}")
-        if known[key].type == "float" and (isinstance(value, bool) or not isinstance(value, int | float)):
-            raise VehicleFileError(path, f"key {key}", f"must be a number, got {value!r}")
-        values[key] = float(value) if known[key].type == "float" else value
+        if known[key].type == "bool":
+            values[key] = table.boolean(key)
+        elif key == "qr_route":
+            values[key] = table.string(key)
+        else:
+            values[key] = table.number(key)
     try:
         return replace(PRESETS[base_name], **values)
     except ValueError as exc:

@@ -126,3 +126,34 @@ def test_rule_grammar_precedence_and_weights() -> None:
     rule = parse_rule("if a is x or not b is y and c is not z then fear is high with 0.5")
     assert rule.level == "high" and rule.weight == 0.5
     assert rule.antecedent == Or((Is("a", "x"), And((Not(Is("b", "y")), Not(Is("c", "z"))))))
+
+
+def _policy_table(doc: str) -> dict[str, tuple[str, str]]:
+    """docs/rules.md's [policy] table: key → (default column, road_car column)."""
+    rows = re.findall(r"^\| `(\w+)` \| [^|]* \| ([^|]*) \| ([^|]*) \|", doc, flags=re.M)
+    return {key: (default.strip(), road.strip()) for key, default, road in rows}
+
+
+def _as_text(value: object) -> str:
+    return ", ".join(map(str, value)) if isinstance(value, tuple) else str(value)
+
+
+def test_the_policy_table_of_the_docs_is_what_the_files_load() -> None:
+    from dataclasses import fields
+
+    from fearguard.policy import PolicyConfig
+
+    table = _policy_table((RULES_DIR.parent / "docs" / "rules.md").read_text())
+    road = fg.load_rules(RULES_DIR / "road_car.toml").policy
+    for f in fields(PolicyConfig):
+        assert f.name in table, f"docs/rules.md does not describe [policy] {f.name}"
+        assert table[f.name] == (_as_text(getattr(PolicyConfig(), f.name)), _as_text(getattr(road, f.name))), f.name
+
+
+def test_the_default_file_spells_out_every_policy_number() -> None:
+    from fearguard.policy import PolicyConfig
+
+    text = (RULES_DIR / "default.toml").read_text()
+    assert fg.load_rules(RULES_DIR / "default.toml").policy == PolicyConfig()  # the file says what the code defaults to
+    for key in PolicyConfig.__dataclass_fields__:
+        assert re.search(rf"^{key} = ", text, flags=re.M), f"default.toml [policy] does not show {key}"
