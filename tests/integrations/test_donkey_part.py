@@ -74,6 +74,21 @@ def test_config_keys_wire_the_sensors_and_the_limits():
     assert not stock.vehicle.has_ultrasonic, "a stock car has no range sensor: the range cue must not stop it"
 
 
+def test_a_preset_gives_the_vehicle_numbers_and_the_other_keys_override_it():
+    from fearguard.vehicle import PRESETS
+
+    p = part(FEARGUARD_PRESET="hc_sr04_pi", FEARGUARD_MAX_SPEED_MPS=1.4)
+    preset = PRESETS["hc_sr04_pi"]
+    v = p.vehicle
+    assert v.max_speed_mps == 1.4  # the key overrides the preset
+    assert (v.max_decel_mps2, v.reaction_time_s, v.stop_margin_m) == (preset.max_decel_mps2, preset.reaction_time_s,
+                                                                      preset.stop_margin_m)
+    assert not v.has_ultrasonic, "the sensors are what the config wires (no HAVE_TFMINI), not what the preset carries"
+    assert part(FEARGUARD_PRESET="duckiebot", HAVE_TFMINI=True).vehicle.ultrasonic_max_range_m == 12.0  # the TFMini's
+    with pytest.raises(ValueError, match=r"FEARGUARD_PRESET.*road_car"):
+        part(FEARGUARD_PRESET="roadcar")
+
+
 def test_every_drive_mode_placement_rewrites_steering_and_throttle():
     p = FearGuardPart.from_cfg(SimpleNamespace(), channels=("steering", "throttle"))
     assert p.inputs[1:3] == ["steering", "throttle"] and p.outputs[:2] == ["steering", "throttle"]

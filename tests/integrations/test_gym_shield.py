@@ -14,7 +14,15 @@ gymnasium = pytest.importorskip("gymnasium", reason="gymnasium + highway-env are
 highway_env = pytest.importorskip("highway_env", reason="gymnasium + highway-env are installed by .ci/highway.sh")
 
 import fearguard as fg  # noqa: E402
-from fearguard.integrations.gym import FearGuardShield, entered_lanes, highway_leads, lane_lead  # noqa: E402
+from fearguard.integrations.gym import (  # noqa: E402
+    FearGuardShield,
+    entered_lanes,
+    highway_leads,
+    highway_observation,
+    highway_vehicle,
+    lane_change_refusal,
+    lane_lead,
+)
 
 sys.path.insert(0, str(Path(__file__).parent))
 from highway_agent import AggressiveAgent  # noqa: E402
@@ -91,7 +99,6 @@ def test_an_aggressive_agent_shielded_never_hits_the_car_ahead_and_rarely_crashe
     assert sum(crashes.values()) <= 0.10 * len(shielded_runs)
 
 
-@pytest.mark.xfail(reason="a lead at a steady gap is braked for until the relative-speed envelope lands (issue 10)", strict=True)
 def test_an_aggressive_agent_shielded_keeps_up_with_the_surrounding_traffic(shielded_runs):
     ego = float(np.mean([r["ego"] for r in shielded_runs]))
     traffic = float(np.mean([r["traffic"] for r in shielded_runs]))
@@ -150,6 +157,40 @@ def test_the_lane_being_entered_counts_its_vehicle_ahead():
     lanes = {lead.lane_index for lead in highway_leads(env)}
     assert lanes <= {ego.lane_index, side}
     assert (side in lanes) == (lane_lead(base.road, ego, side) is not None)
+
+
+def test_the_vehicle_is_the_envs_car_and_the_lead_speed_comes_from_the_simulator():
+    env = make()
+    env.reset(seed=4)
+    base = env.unwrapped
+    v = highway_vehicle(env)
+    assert (v.wheelbase_m, v.width_m, v.max_steering_deg, v.max_decel_mps2) == (5.0, 2.0, pytest.approx(45.0), 5.0)
+    assert v.lead_max_decel_mps2 == 6.0  # IDMVehicle.ACC_MAX: the traffic's hardest braking
+    assert v.max_lateral_accel_mps2 == pytest.approx(v.max_speed_mps**2 / v.wheelbase_m)  # ±45° at top speed: no tyre model
+    obs = highway_observation(env, v)
+    lead = min(highway_leads(env), key=lambda lead: lead.range_m)
+    assert obs.range_rate_mps is not None and obs.speed_mps == pytest.approx(base.vehicle.speed)
+    assert obs.cues.obstacle_range_m <= 150.0 and lead.range_m <= obs.cues.obstacle_range_m
+
+
+def test_a_car_beside_is_not_ahead_and_blocks_a_lane_change_toward_it():
+    env = make()
+    env.reset(seed=0)
+    base = env.unwrapped
+    ego, road = base.vehicle, base.road
+    side = road.network.side_lanes(ego.lane_index)[0]
+    other = next(o for o in road.vehicles if o is not ego)
+    lane = road.network.get_lane(side)
+    s_ego = lane.local_coordinates(ego.position)[0]
+    other.position = lane.position(s_ego + 2.0, 0.0)  # beside the ego, its centre 2 m ahead (overlapping)
+    other.heading, other.lane_index = lane.heading_at(s_ego), side
+    lead = lane_lead(road, ego, side)
+    assert lead is None or lead.range_m > 0.0  # the car beside is not "ahead at 0 m" (it would stop the ego)
+    toward = 0.3 if side[2] > ego.lane_index[2] else -0.3  # rad, + = right
+    assert "beside" in lane_change_refusal(env, highway_vehicle(env), toward)
+    _, _, _, _, info = env.step(np.array([0.0, toward / math.radians(45.0)], np.float32))
+    assert "beside" in info["fearguard_lane_change"]
+    assert abs(info["fearguard_action"][1]) < abs(toward / math.radians(45.0))  # steered to keep the lane instead
 
 
 def test_a_non_highway_env_needs_observe_and_act():

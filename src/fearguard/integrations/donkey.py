@@ -36,7 +36,7 @@ import numpy as np
 from fearguard.camera import CameraModel, camera_preset, load_camera
 from fearguard.readings import finite_reading
 from fearguard.supervisor import Command, FearGuard, Observation
-from fearguard.vehicle import VehicleLimits
+from fearguard.vehicle import PRESETS, VehicleLimits
 
 logger = logging.getLogger(__name__)
 
@@ -130,8 +130,13 @@ class FearGuardPart:
     def from_cfg(
         cls, cfg: Any, *, channels: Sequence[str] = ("pilot/angle", "pilot/throttle"), clock: Callable[[], float] = time.monotonic
     ) -> FearGuardPart:
-        """Build the part from a Donkey config (``myconfig.py`` / ``cfg_complete.py`` keys, FEARGUARD_* for its own)."""
-        base = VehicleLimits()
+        """Build the part from a Donkey config (``myconfig.py`` / ``cfg_complete.py`` keys, FEARGUARD_* for its own).
+
+        ``FEARGUARD_PRESET`` (a name in ``fearguard.vehicle.PRESETS``, default the camera-only 1:10 car) gives every
+        vehicle number; the other FEARGUARD_* keys override it, and the sensors are what the config wires
+        (HAVE_TFMINI, HAVE_ODOM), whatever the preset carries.
+        """
+        base = _cfg_preset(getattr(cfg, "FEARGUARD_PRESET", None))
         has_tfmini, has_odom = bool(getattr(cfg, "HAVE_TFMINI", False)), bool(getattr(cfg, "HAVE_ODOM", False))
         if getattr(cfg, "USE_LIDAR", False):
             logger.warning("fearguard: USE_LIDAR is not read (the RPLidar part's output is not a range ahead); wire a TFMini")
@@ -147,8 +152,8 @@ class FearGuardPart:
         )
         if not hasattr(cfg, "FEARGUARD_MAX_SPEED_MPS"):
             logger.warning(
-                "fearguard: FEARGUARD_MAX_SPEED_MPS not set, assuming %.1f m/s at full throttle; measure it (docs/donkey.md)",
-                vehicle.max_speed_mps,
+                "fearguard: FEARGUARD_MAX_SPEED_MPS not set, assuming %.1f m/s at full throttle (%s); measure it (docs/donkey.md)",
+                vehicle.max_speed_mps, f"preset {cfg.FEARGUARD_PRESET}" if getattr(cfg, "FEARGUARD_PRESET", None) else "default",
             )
         width = int(_cfg_number(cfg, "IMAGE_W", 160, "pixels"))
         height = int(_cfg_number(cfg, "IMAGE_H", 120, "pixels"))
@@ -230,6 +235,15 @@ def _cfg_number(cfg: Any, key: str, default: float, meaning: str) -> float:
     if number is None or number <= 0:
         raise ValueError(f"Donkey config {key} = {value!r}: expected a number > 0 ({meaning})")
     return number
+
+
+def _cfg_preset(value: object) -> VehicleLimits:
+    """FEARGUARD_PRESET: None (the camera-only default) or a preset name from fearguard.vehicle.PRESETS."""
+    if value is None:
+        return VehicleLimits()
+    if not isinstance(value, str) or value not in PRESETS:
+        raise ValueError(f"Donkey config FEARGUARD_PRESET = {value!r}: expected one of {', '.join(PRESETS)}")
+    return PRESETS[value]
 
 
 def _cfg_camera(value: object, width: int, height: int) -> CameraModel | None:
