@@ -171,20 +171,18 @@ def region_mask(region: RoadRegion) -> np.ndarray:
     return mask
 
 
-def marking_features(hls: np.ndarray, mask: np.ndarray, region: RoadRegion | None = None) -> np.ndarray:
+def marking_features(
+    hls: np.ndarray, mask: np.ndarray, region: RoadRegion | None = None, light: np.ndarray | None = None
+) -> np.ndarray:
     """uint8 0/255 pixels that look like lane paint (bright ridges or yellow) inside the mask, from an HLS image.
 
-    Markings widen toward the camera, so the top-hat window is wider in the near half of the road region.
+    Markings widen toward the camera, so the top-hat window is wider in the near half of the road region (the
+    top-hat is row by row, so each half is computed on its own rows only). ``light``: ``smoothed_light(hls)`` when
+    the caller already has it.
     """
-    hue, light, sat = hls[:, :, 0], hls[:, :, 1], hls[:, :, 2]
-    light = smoothed_light(hls)
-    w = hls.shape[1]
-    far = region.far_tophat if region is not None else TOPHAT_WIDTH
-    ridge_l, ridge_s = _tophat(light, far * w), _tophat(sat, far * w)
-    if region is not None:
-        near = slice((region.top_v_px + region.bottom_v_px) // 2, region.bottom_v_px + 1)
-        ridge_l[near] = _tophat(light[near], region.near_tophat * w)
-        ridge_s[near] = _tophat(sat[near], region.near_tophat * w)
+    hue, sat = hls[:, :, 0], hls[:, :, 2]
+    light = smoothed_light(hls) if light is None else light
+    ridge_l, ridge_s = _ridges(light, region), _ridges(sat, region)
     background = light.astype(np.int16) - ridge_l  # the opening: the road's lightness under the marking
     bright = (ridge_l >= RIDGE_MIN) & (ridge_l >= RIDGE_RATIO * background)
     yellow = (hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]) & (sat >= YELLOW_SAT_MIN) & (light >= YELLOW_LIGHT_MIN)
@@ -196,6 +194,20 @@ def marking_features(hls: np.ndarray, mask: np.ndarray, region: RoadRegion | Non
 def smoothed_light(hls: np.ndarray) -> np.ndarray:
     """HLS lightness, 3×3 Gaussian-smoothed: the classic smoothing step (sensor noise must not make ridges)."""
     return cv2.GaussianBlur(hls[:, :, 1], (3, 3), 0)
+
+
+def _ridges(channel: np.ndarray, region: RoadRegion | None) -> np.ndarray:
+    """Top-hat of one channel: the near window on the near half of the region's rows, the far window elsewhere. The
+    top-hat is row by row, so each window runs on its own rows only (the same result, half the work)."""
+    w = channel.shape[1]
+    if region is None:
+        return _tophat(channel, TOPHAT_WIDTH * w)
+    split, end = (region.top_v_px + region.bottom_v_px) // 2, min(region.bottom_v_px + 1, len(channel))
+    out = np.empty_like(channel)
+    for lo, hi, window in ((0, split, region.far_tophat), (split, end, region.near_tophat), (end, len(channel), region.far_tophat)):
+        if hi > lo:
+            out[lo:hi] = _tophat(channel[lo:hi], window * w)
+    return out
 
 
 def _tophat(channel: np.ndarray, width_px: float) -> np.ndarray:
@@ -372,9 +384,9 @@ def detect_lanes(
     band = slice(region.top_v_px, region.bottom_v_px + 1)  # everything below runs on the road rows only
     crop = replace(region, top_v_px=0, bottom_v_px=region.bottom_v_px - region.top_v_px, height_px=region.bottom_v_px - region.top_v_px + 1)
     features = np.zeros(mask.shape, np.uint8)
-    features[band] = marking_features(hls[band], mask[band], crop)
     light = np.zeros(mask.shape, np.uint8)
     light[band] = smoothed_light(hls[band])
+    features[band] = marking_features(hls[band], mask[band], crop, light[band])
     maps = ridge_maps((light, hls[:, :, 2]), features, region.top_v_px, region.bottom_v_px)
     segments = hough_segments(features[band])
     segments[:, [1, 3]] += region.top_v_px
