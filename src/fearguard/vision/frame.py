@@ -162,6 +162,7 @@ class Lanes:
     agreement_left: float  # [0..1] detection vs the track's prediction (1 without a track)
     agreement_right: float
     features: np.ndarray  # marking pixels (working size)
+    paint_integral: np.ndarray  # integral image of the marking pixels over the road rows (the ridge tables'; occlusion's too)
     aim_row_px: float  # the look-ahead row the steering aims at
     lane_width_px: float  # lane width at that row (measured, remembered or the default)
 
@@ -210,7 +211,7 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float) -> Lanes:
         seen_left=det.left if tracked.left_accepted else None, seen_right=det.right if tracked.right_accepted else None,
         agreement_left=agreement(det.left, tracked.predicted_left, region, width_px),
         agreement_right=agreement(det.right, tracked.predicted_right, region, width_px),
-        features=det.features, aim_row_px=v_aim, lane_width_px=width_px,
+        features=det.features, paint_integral=det.maps.paint_integral, aim_row_px=v_aim, lane_width_px=width_px,
     )
 
 
@@ -225,7 +226,7 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
         found = detect_lead(p.gray, p.hls, p.region, expected_l, expected_r, reference)
         box = trackers.leads.update(t_s, found.scaled(p.scale) if found is not None else None)
     boxes = (box.scaled(1.0 / p.scale).as_int(),) if box is not None else ()
-    surface = surface_maps(p.gray, p.hls, lanes.features, p.region)
+    surface = surface_maps(p.gray, p.hls, lanes.features, p.region, lanes.paint_integral)
     measured = road_appearance(p.gray, p.hls, p.region, expected_l, expected_r, surface)
     road = trackers.road.reference(measured)
     occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface)

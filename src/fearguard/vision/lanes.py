@@ -100,7 +100,7 @@ class LaneDetection:
     right: LaneLine | None
     features: np.ndarray  # uint8 0/255 marking pixels inside the region
     segment_count: int
-    maps: RidgeMaps | None = None  # the ridge tables (their marking-pixel integral serves occlusion too)
+    maps: RidgeMaps  # the ridge tables (their marking-pixel integral serves occlusion too)
 
 
 def _inside(x: float, lo: float, hi: float, ramp: float) -> float:
@@ -257,7 +257,7 @@ def candidate_fits(
     RANSAC over segment hypotheses; hypotheses with RANSAC_KEEP of the best support compete, ordered by distance to
     the prior — last frame's tracked boundary — else innermost first (the ego lane's boundary is the marking nearest
     the car's path); each is the length-weighted least-squares fit u = a·v + b of its inlier segments. The caller
-    picks among them by marking evidence (``ridge_line``); the prior keeps a curved boundary, which two straight
+    picks among them by marking evidence (``ridge_lines``); the prior keeps a curved boundary, which two straight
     lines fit about equally, from flipping."""
     if len(segments) == 0:
         return
@@ -335,18 +335,22 @@ def lane_width_rows(rows: np.ndarray, priors: tuple[LaneLine | None, LaneLine | 
     return right.u_at(v) - left.u_at(v)
 
 
-def ridge_line(
-    maps: RidgeMaps, region: RoadRegion, fit: tuple[float, float], lane_width: np.ndarray, right_side: bool
-) -> tuple[tuple[float, float], float]:
-    """The boundary refitted on the inner edges of the marking ridges along a Hough fit, and its support (ridges.py)."""
+def ridge_lines(
+    maps: RidgeMaps, region: RoadRegion, fits: list[tuple[float, float]], lane_width: np.ndarray, right_sides: list[bool]
+) -> list[tuple[tuple[float, float], float]]:
+    """Each Hough fit refitted on the inner edges of the marking ridges along it, and its support (ridges.py); all
+    fits scanned in one pass."""
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
-    scan = scan_ridges(maps, rows, fit[0] * rows + fit[1], lane_width, right_side, region.marking_share)
-    ok = scan.ok
-    if ok.sum() >= REFIT_MIN_ROWS:
-        refit = _weighted_fit(rows[ok].astype(np.float64), scan.inner_u[ok], np.ones(int(ok.sum())))
-        if refit is not None and abs(refit[0] - fit[0]) < REFIT_MAX_SLOPE_CHANGE:
-            fit = refit
-    return fit, scan.support
+    centres = np.array([a * rows + b for a, b in fits])
+    scan = scan_ridges(maps, rows, centres, lane_width, np.array(right_sides, bool), region.marking_share)
+    out = []
+    for fit, ok, inner, support in zip(fits, scan.ok, scan.inner_u, scan.support, strict=True):
+        if ok.sum() >= REFIT_MIN_ROWS:
+            refit = _weighted_fit(rows[ok].astype(np.float64), inner[ok], np.ones(int(ok.sum())))
+            if refit is not None and abs(refit[0] - fit[0]) < REFIT_MAX_SLOPE_CHANGE:
+                fit = refit
+        out.append((fit, float(support)))
+    return out
 
 
 def best_pair(
@@ -393,16 +397,20 @@ def detect_lanes(
     sides = split_by_slope(segments, region.width_px)
     lane_width = lane_width_rows(np.arange(region.top_v_px, region.bottom_v_px + 1), priors, region)
     plain = _plainness(maps.paint_integral[-1, -1] / max(1, cv2.countNonZero(mask)), region.clutter)
-    found: list[list[LaneLine]] = []
-    for i, (side, prior) in enumerate(zip(sides, priors, strict=True)):
-        lines = []
-        for fit in candidate_fits(side, region, prior):
-            (a, b), support = ridge_line(maps, region, fit, lane_width, right_side=i == 1)
+    found: list[list[LaneLine]] = [[], []]
+    fits = [candidate_fits(side, region, prior) for side, prior in zip(sides, priors, strict=True)]
+    looking = [0, 1]  # the sides whose preferred line is not yet well supported: their next candidates are scanned
+    while looking:
+        batch = [(i, fit) for i in looking if (fit := next(fits[i], None)) is not None]
+        if not batch:
+            break
+        looking = []
+        scanned = ridge_lines(maps, region, [f for _, f in batch], lane_width, [i == 1 for i, _ in batch])
+        for (i, _), ((a, b), support) in zip(batch, scanned, strict=True):
             support *= plain
             if support > 0:
-                lines.append(LaneLine(a, b, support, len(side)))
-            if support >= PREFER_SHARE and len(lines) == 1:
-                break  # the preferred line is well supported: no later one can beat it clearly
-        found.append(lines)
+                found[i].append(LaneLine(a, b, support, len(sides[i])))
+            if not (support >= PREFER_SHARE and len(found[i]) == 1):  # else no later candidate can beat it clearly
+                looking.append(i)
     left, right = best_pair(found[0], found[1], region)
     return LaneDetection(region, left, right, features, len(segments), maps)

@@ -35,12 +35,12 @@ SUPPORT_FULL = 0.35  # [-] covering this share of the rows counts as full suppor
 
 @dataclass(frozen=True)
 class RidgeScan:
-    """Per-row result of scanning along one candidate boundary."""
+    """Per-row result of scanning along candidate boundaries: one row of each 2-D array per candidate."""
 
-    rows: np.ndarray  # [px] image rows scanned
-    ok: np.ndarray  # bool per row: a marking-like ridge was found there
-    inner_u: np.ndarray  # [px] the ridge edge nearest the lane centre (NaN where not ok)
-    support: float  # [0..1] share of rows ok, saturating at SUPPORT_FULL
+    rows: np.ndarray  # [px] image rows scanned (n,)
+    ok: np.ndarray  # bool (candidates, n): a marking-like ridge was found there
+    inner_u: np.ndarray  # [px] (candidates, n): the ridge edge nearest the lane centre (NaN where not ok)
+    support: np.ndarray  # [0..1] (candidates,): share of rows ok, saturating at SUPPORT_FULL
 
 
 @dataclass(frozen=True)
@@ -78,13 +78,14 @@ def ridge_maps(channels: tuple[np.ndarray, ...], features: np.ndarray, top_v_px:
     integrals[0] = cv2.integral(feat.view(np.uint8), sdepth=cv2.CV_64F)
     for i, c in enumerate(channels):
         integrals[1 + 2 * i], integrals[2 + 2 * i] = cv2.integral2(np.ascontiguousarray(c[band]), sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
-    row_paint = integrals[0, 1:] - integrals[0, :-1]  # marking pixels in [0, u) of each row
-    gaps = np.arange(w + 1)[None, :] - row_paint + (np.arange(h) * (w + 1))[:, None]
+    gaps = np.zeros((h, w + 1), np.int64)
+    np.cumsum(~feat, axis=1, out=gaps[:, 1:])  # non-marking pixels in [0, u) of each row
+    gaps += (np.arange(h) * (w + 1))[:, None]
     return RidgeMaps(top_v_px, feat, integrals, gaps.ravel())
 
 
 def _span_sums(integrals: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Sums over columns [lo, hi) of band rows r (lo, hi: (spans, rows)), for every layer: (layers, spans, rows).
+    """Sums over columns [lo, hi) of band rows r (r: (rows,); lo, hi: (..., rows)), for every layer: (layers, ..., rows).
     One flat ``take`` for all corners of all spans (fancy indexing per corner costs more than the arithmetic)."""
     stride = integrals.shape[2]
     top, bottom = r * stride, (r + 1) * stride
@@ -94,32 +95,35 @@ def _span_sums(integrals: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndar
 
 
 def scan_ridges(
-    maps: RidgeMaps, rows: np.ndarray, centre_u: np.ndarray, lane_width_px: np.ndarray, inner_is_left: bool,
+    maps: RidgeMaps, rows: np.ndarray, centre_u: np.ndarray, lane_width_px: np.ndarray, inner_is_left: np.ndarray,
     width_range: tuple[float, float] = WIDTH_RANGE,
 ) -> RidgeScan:
-    """Scan rows (ints, inside the maps' band) around the columns centre_u (float per row) for a marking ridge.
+    """Scan rows (ints, inside the maps' band) around the columns centre_u of every candidate boundary (float,
+    (candidates, rows)) for a marking ridge — all candidates in one pass of array operations, whose cost is mostly
+    per operation, not per element.
 
     maps: ``ridge_maps`` of the (smoothed) lightness and the saturation (yellow paint on pale concrete is no lighter
     than the concrete, only more saturated: a ridge must stand out in one of them) and of the marking pixels;
-    lane_width_px: the lane width on each row (from the tracked boundaries or a prior); inner_is_left: True for a
-    right boundary (its inner edge is the run's left edge); width_range: paint width as a share of the lane width.
+    lane_width_px: the lane width on each row (from the tracked boundaries or a prior); inner_is_left: bool per
+    candidate, True for a right boundary (its inner edge is the run's left edge); width_range: paint width as a share
+    of the lane width.
     """
-    n = len(rows)
-    if n == 0:
-        return RidgeScan(rows, np.zeros(0, bool), np.zeros(0), 0.0)
+    centre_u = np.atleast_2d(centre_u)
+    k, n = centre_u.shape
+    if n == 0 or k == 0:
+        return RidgeScan(rows, np.zeros((k, n), bool), np.zeros((k, n)), np.zeros(k))
     w = maps.feat.shape[1]
     lw = np.maximum(lane_width_px, 4.0)
     search = max(2, int(SEARCH * w))
     offsets = np.arange(-search, search + 1)
-    cols = np.rint(centre_u).astype(np.int64)[:, None] + offsets[None, :]
+    cols = np.rint(centre_u).astype(np.int64)[:, :, None] + offsets  # (k, n, offsets)
     rr = rows - maps.top_v_px
     cc = clamp(cols, 0, w - 1)
     near = maps.feat[rr[:, None], cc] & (cols == cc)
     # the run of marking pixels nearest the candidate column (within the search distance)
-    j0 = np.argmin(np.where(near, np.abs(offsets)[None, :], 10**6), axis=1)
-    pick = np.arange(n)
-    found = near[pick, j0]
-    u0 = cc[pick, j0]
+    j0 = np.argmin(np.where(near, np.abs(offsets), 10**6), axis=2)[:, :, None]
+    found = np.take_along_axis(near, j0, axis=2)[:, :, 0]
+    u0 = np.take_along_axis(cc, j0, axis=2)[:, :, 0]
     a, b = maps.runs(rr, u0)
     width = b - a + 1
     ok = found & (width >= np.maximum(MIN_WIDTH_PX, width_range[0] * lw)) & (width <= np.maximum(MAX_WIDTH_FLOOR * w, width_range[1] * lw))
@@ -127,9 +131,9 @@ def scan_ridges(
     lo = clamp(np.stack([a, a - FLANK_GAP_PX - fw, b + FLANK_GAP_PX + 1]), 0, w)  # spans: run, left flank, right flank
     hi = clamp(np.stack([b + 1, a - FLANK_GAP_PX, b + FLANK_GAP_PX + 1 + fw]), 0, w)
     count = hi - lo
-    means = _span_sums(maps.integrals, rr, lo, hi) / np.maximum(count, 1)
+    means = _span_sums(maps.integrals, rr, lo, hi) / np.maximum(count, 1)  # (layers, spans, k, n)
     paint = means[1::2, 0]  # each channel's mean over the run
-    stands_out = np.ones((len(paint), n), bool)
+    stands_out = np.ones(paint.shape, bool)
     for f in (1, 2):  # the flanks
         plain = means[0, f] <= FLANK_PAINT_MAX  # the road beside paint holds (almost) no paint
         mean, sq = means[1::2, f], means[2::2, f]
@@ -139,8 +143,8 @@ def scan_ridges(
         stands_out &= passes | (count[f] == 0)  # a flank outside the image says nothing (lines leaving sideways)
     ok &= (count[1] + count[2] > 0) & stands_out.any(axis=0)
     ok = _in_long_runs(ok, MIN_RUN_ROWS)
-    inner = np.where(ok, a if inner_is_left else b, np.nan).astype(np.float64)
-    support = float(min(1.0, ok.mean() / SUPPORT_FULL))
+    inner = np.where(ok, np.where(np.asarray(inner_is_left)[:, None], a, b), np.nan).astype(np.float64)
+    support = np.minimum(1.0, ok.mean(axis=1) / SUPPORT_FULL)
     return RidgeScan(rows, ok, inner, support)
 
 
@@ -152,14 +156,18 @@ def clamp(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
 
 
 def _in_long_runs(ok: np.ndarray, min_rows: int) -> np.ndarray:
-    """ok, keeping only runs of at least min_rows consecutive True rows."""
-    if min_rows <= 1 or len(ok) == 0:
+    """ok (candidates, rows), keeping only runs of at least min_rows consecutive True rows (vectorised: the run edges
+    of all candidates at once, a False column between candidates)."""
+    k, n = ok.shape
+    if min_rows <= 1 or n == 0:
         return ok
-    padded = np.concatenate([[False], ok, [False]]).astype(np.int8)
-    change = np.diff(padded)
-    starts, ends = np.flatnonzero(change == 1), np.flatnonzero(change == -1)
-    keep = np.zeros(len(ok), bool)
-    for lo, hi in zip(starts, ends, strict=True):
-        if hi - lo >= min_rows:
-            keep[lo:hi] = True
-    return keep
+    padded = np.zeros((k, n + 2), np.int8)
+    padded[:, 1:-1] = ok
+    change = np.diff(padded.ravel())
+    # in the flat padded layout: each run's first index and the index just after its last
+    first, after = np.flatnonzero(change == 1) + 1, np.flatnonzero(change == -1) + 1
+    long = after - first >= min_rows
+    edges = np.zeros(padded.size + 1, np.int8)
+    edges[first[long]] = 1
+    edges[after[long]] = -1
+    return (np.cumsum(edges[:-1]) > 0).reshape(k, n + 2)[:, 1:-1]
