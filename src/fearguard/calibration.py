@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import re
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -175,8 +175,12 @@ def calibrate_chessboard(
     square_m: float = 1.0,
     mount_height_m: float | None = None,
     pitch_deg: float = 0.0,
+    on_image: Callable[[int, int], None] | None = None,
 ) -> CalibrationResult:
-    """Calibrate from chessboard photos; ``square_m`` only scales the board poses, not the intrinsics."""
+    """Calibrate from chessboard photos; ``square_m`` only scales the board poses, not the intrinsics.
+
+    ``on_image(done, total)`` is called after each image's board search (the slow part: a progress bar).
+    """
     pattern = check_pattern(pattern)
     paths = [Path(p) for p in paths]
     if not paths:
@@ -203,7 +207,9 @@ def calibrate_chessboard(
     found: list[Path] = []
     corners: list[np.ndarray] = []
     notes: list[str] = []
-    for path, gray in images.items():
+    report = on_image or (lambda done, total: None)
+    report(0, len(images))
+    for done, (path, gray) in enumerate(images.items(), start=1):
         if (gray.shape[1], gray.shape[0]) != size:
             notes.append(f"{path.name}: {gray.shape[1]}x{gray.shape[0]} fitted to {size[0]}x{size[1]} at the right/bottom edge")
         board = detect_board(_fit_size(gray, size), pattern)
@@ -214,6 +220,7 @@ def calibrate_chessboard(
             corners.append(board.corners_px)
             if board.method == "sb":
                 notes.append(f"{path.name}: board found by the SB detector ({board.reason})")
+        report(done, len(images))
     if len(found) < MIN_BOARDS:
         cols, rows = pattern
         raise CalibrationError(

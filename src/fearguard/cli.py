@@ -1,10 +1,13 @@
-"""Command line: ``demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``suite``, ``verify``, ``duckietown``.
+"""Command line: ``demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``scenarios``, ``suite``, ``verify``,
+``duckietown``.
 
 A thin layer: it parses arguments, calls the library, prints, and maps errors to exit codes
 (0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr, 130 / 143 interrupted by SIGINT /
 SIGTERM). Signals follow one policy (``interrupt.py``): the frame loops (replay, run, suite) finish the
 current frame and write everything with ``"interrupted": true``; other commands stop at once. The
 library is imported only after the handlers are installed, so a Ctrl-C during start-up is handled too.
+Every ``--out`` is optional: without it the output goes to a new timestamped folder under
+``./fearguard-out/`` and the command prints where. Warnings are one line on stderr (``warning: ...``).
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ import importlib
 import math
 import sys
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -29,6 +33,8 @@ if TYPE_CHECKING:
 
 FRAME_LOOPS = ("replay", "run", "suite")  # commands that finish the current frame on a signal
 VIDEO_HELP = "also write the annotated video (annotated.mp4, H.264; annotated.avi, MJPG, without the video extra)"
+OUT_ROOT = Path("fearguard-out")  # where a command writes when --out is not given: OUT_ROOT/COMMAND-LABEL-YYYYmmdd-HHMMSS
+OUT_HELP = "(default: a new folder fearguard-out/%s-...-TIMESTAMP)"
 
 EXPLAIN_SETTLE_S = 10.0  # [s] explain shows the command after this long with the same cues
 EXPLAIN_RATE_HZ = 10.0  # [Hz] frame rate of that settling run
@@ -75,7 +81,7 @@ def cmd_plot(args: argparse.Namespace) -> int:
 
     plot_rules = _desktop("fearguard.plot", "plots").plot_rules
 
-    for path in plot_rules(load_rules(args.file), args.out):
+    for path in plot_rules(load_rules(args.file), args.out or _new_out("rules-plot", Path(args.file or "default").stem)):
         print(path)
     return 0
 
@@ -122,7 +128,9 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
     pattern = parse_pattern(args.pattern)
     paths = expand_image_paths(args.images)
-    result = calibrate_chessboard(paths, pattern, args.square_m, args.mount_height_m, args.pitch_deg)
+    out = args.out or str(_new_out("calibrate", args.pattern) / "camera.toml")  # a given --out's folder must exist
+    with _Progress("calibrate", unit="images") as progress:
+        result = calibrate_chessboard(paths, pattern, args.square_m, args.mount_height_m, args.pitch_deg, on_image=progress.update)
     lines = {p: f"found   {e:.2f} px" for p, e in zip(result.found, result.per_image_error_px, strict=True)}
     lines |= {p: f"missed  {why}" for p, why in zip(result.missed, result.missed_reasons, strict=True)}
     width = max(len(p.name) for p in paths)
@@ -135,10 +143,12 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     dist = " ".join(f"{k} {v:+.4f}" for k, v in zip(("k1", "k2", "p1", "p2", "k3"), cam.distortion, strict=False))
     print(f"camera {cam.width_px}x{cam.height_px}: fx {cam.fx_px:.1f} fy {cam.fy_px:.1f} cx {cam.cx_px:.1f} cy {cam.cy_px:.1f} px; {dist}")
     try:
-        save_camera(cam, args.out)
+        if not args.out:
+            Path(out).parent.mkdir(parents=True, exist_ok=True)
+        save_camera(cam, out)
     except OSError as exc:
-        raise CalibrationError(f"--out {args.out}: cannot write it ({exc.strerror}); choose a writable path") from exc
-    print(f"wrote {Path(args.out)}")
+        raise CalibrationError(f"--out {out}: cannot write it ({exc.strerror}); choose a writable path") from exc
+    print(f"wrote {Path(out)}")
     return 0
 
 
@@ -150,44 +160,69 @@ def _desktop(module: str, what: str) -> Any:
         raise FearguardError(f"{what} need {exc.name} ({exc}): pip install 'fearguard[desktop]'") from None
 
 
+def _new_out(command: str, label: str) -> Path:
+    """A fresh output folder for a command run without --out: fearguard-out/COMMAND-LABEL-YYYYmmdd-HHMMSS[-N]."""
+    stem = OUT_ROOT / f"{command}-{Path(label).stem or command}-{time.strftime('%Y%m%d-%H%M%S')}"
+    path, n = stem, 1
+    while path.exists():
+        n += 1
+        path = stem.with_name(f"{stem.name}-{n}")
+    return path
+
+
 class _Progress:
-    """A rich progress bar with frames/s on stderr (quiet when stderr is not a terminal)."""
+    """A progress bar on stderr (rich's; without rich a plain line redrawn in place); quiet when stderr is no terminal."""
 
-    def __init__(self, label: str) -> None:
-        _desktop("rich", "progress bars")
-        from rich.console import Console
-        from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-
+    def __init__(self, label: str, unit: str = "frames") -> None:
+        self._label, self._unit, self._start, self._drawn = label, unit, time.perf_counter(), 0.0
+        self._bar: Any = None
+        self._live = sys.stderr.isatty()
+        try:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+        except ModuleNotFoundError:  # the core install has no rich: the plain line below
+            return
         console = Console(stderr=True)
-        self._bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[fps]}"),
+        self._bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[rate]}"),
                              TimeRemainingColumn(), console=console, disable=not console.is_terminal, transient=False)
-        self._task = self._bar.add_task(label, total=None, fps="")
-        self._start = time.perf_counter()
+        self._task = self._bar.add_task(label, total=None, rate="")
 
     def __enter__(self) -> _Progress:
-        self._bar.__enter__()
+        if self._bar is not None:
+            self._bar.__enter__()
         return self
 
     def __exit__(self, *exc: object) -> None:
-        self._bar.__exit__(None, None, None)
+        if self._bar is not None:
+            self._bar.__exit__(None, None, None)
+        elif self._live and self._drawn:
+            print(file=sys.stderr)
 
     def update(self, done: int, total: int | None) -> None:
         elapsed = time.perf_counter() - self._start
-        fps = f"{done / elapsed:.0f} frames/s" if elapsed > 0 else ""
-        self._bar.update(self._task, completed=done, total=total, fps=fps)
+        rate = f"{done / elapsed:.{0 if self._unit == 'frames' else 2}f} {self._unit}/s" if elapsed > 0 and done else ""
+        if self._bar is not None:
+            self._bar.update(self._task, completed=done, total=total, rate=rate)
+        elif self._live and (elapsed - self._drawn >= 0.5 or done == total):
+            self._drawn = elapsed
+            print(f"\r{self._label}: {done}{f'/{total}' if total else ''} {self._unit} {rate}   ", end="", file=sys.stderr, flush=True)
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
     """A recorded drive → log.jsonl, summary.json, timeline.png (and annotated.mp4): where and why fear rose."""
     from fearguard.replay.run import ReplayOptions, replay
+    from fearguard.steer_import import resolve_steer
+    from fearguard.vehicle import resolve_vehicle
 
+    steer, _ = resolve_steer(args.steer)
     options = ReplayOptions(
         rules=args.rules, camera=args.camera, sensor_log=args.sensor_log, strict=args.strict, no_ultrasonic=args.no_ultrasonic,
         qr_localisation=args.qr_localisation, speed_mps=args.speed_mps, fps=args.fps, start=args.from_, stop=args.to,
-        every=args.every, video=args.video, plots=not args.no_plots,
+        every=args.every, video=args.video, plots=not args.no_plots, vehicle=resolve_vehicle(args.vehicle), steer=steer,
     )
+    out = args.out or _new_out("replay", args.recording.rstrip("/\\"))
     with _Progress("replay") as progress:
-        result = replay(args.recording, args.out, options, on_frame=progress.update, stop=args.stop)
+        result = replay(args.recording, out, options, on_frame=progress.update, stop=args.stop)
     _print_replay_summary(result.summary, result.out_dir)
     return _interrupted_exit(args.stop) if result.interrupted else 0
 
@@ -233,13 +268,14 @@ def _by(summary: dict) -> str:
 
 def cmd_run(args: argparse.Namespace) -> int:
     """One scenario closed loop → log.jsonl, summary.json, plots (and the video); exit 1 if an expectation fails."""
-    from fearguard.sim.scenario import load_scenario
+    from fearguard.sim.scenario import find_scenario, load_scenario
     from fearguard.sim.suite import run_to_folder
 
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(find_scenario(args.scenario))
     controller = "unguarded" if args.unguarded else (args.baseline or "guarded")
+    out = Path(args.out) if args.out else _new_out("run", f"{scenario.name}-{controller}")
     with _Progress(scenario.name) as progress:
-        result = run_to_folder(scenario, Path(args.out), args.seed, controller, args.video, progress.update, stop=args.stop)
+        result = run_to_folder(scenario, out, args.seed, controller, args.video, progress.update, stop=args.stop)
     m = result.metrics
     print(f"{scenario.name} ({controller}, seed {result.seed}): {result.frames} frames, {m.distance_m:.1f} m, "
           f"mean speed {m.mean_speed_mps or 0.0:.2f} m/s, collisions {m.collisions}, lane departures {m.lane_departures}, "
@@ -250,8 +286,9 @@ def cmd_run(args: argparse.Namespace) -> int:
               "(summary.json says interrupted, passed false)")
     else:
         for e in result.expectations:
-            print(f"  {'ok  ' if e.ok else 'FAIL'} {e.name}: {e.detail}")
-    print(f"wrote {args.out}/log.jsonl, summary.json" + ("" if result.interrupted else ", timeline/trajectory plots"))
+            print(f"  {'n/a ' if e.ok is None else 'ok  ' if e.ok else 'FAIL'} {e.name}: {e.detail}")
+    plots = "" if result.interrupted else (", timeline.png, trajectory.png" if controller == "guarded" else ", trajectory.png")
+    print(f"wrote {out}/log.jsonl, summary.json{plots}")
     if result.video_path is not None:
         print(f"video {result.video_path}")
     if result.interrupted:
@@ -265,15 +302,17 @@ def cmd_suite(args: argparse.Namespace) -> int:
     Each finished run is appended to runs.jsonl at once; ``--resume`` skips the runs already there.
     """
     from fearguard.recorder import write_json
-    from fearguard.sim.suite import run_suite, scenario_files, suite_markdown, suite_table
+    from fearguard.sim.suite import run_suite, scenario_files, suite_markdown, suite_table, suite_totals
 
     files = scenario_files(args.folder)
     if not files:
         raise FearguardError(f"suite: no *.toml scenarios in {args.folder}; give a folder of scenario files")
-    out = Path(args.out)
+    out = Path(args.out) if args.out else _latest_suite() if args.resume else _new_out("suite", f"{args.seeds}seeds")
     out.mkdir(parents=True, exist_ok=True)
-    progress = run_suite(files, args.seeds, on_run=print if args.verbose else None, runs_log=out / "runs.jsonl", resume=args.resume,
-                         stop=args.stop)
+    print(f"suite: {len(files)} scenarios × {args.seeds} seed(s) × guarded and 3 baselines → {out}", file=sys.stderr)
+    with _Progress("suite", unit="runs") as bar:
+        progress = run_suite(files, args.seeds, on_run=print if args.verbose else None, runs_log=out / "runs.jsonl",
+                             resume=args.resume, stop=args.stop, on_progress=bar.update)
     rows = progress.rows
     markdown = suite_markdown(rows)
     (out / "suite.md").write_text(markdown, encoding="utf-8")
@@ -281,12 +320,36 @@ def cmd_suite(args: argparse.Namespace) -> int:
                                     "planned_runs": progress.planned, "finished_runs": len(rows), "resumed_runs": progress.resumed,
                                     "runs": rows, "table": suite_table(rows)})
     print(markdown)
+    print("totals: " + "; ".join(
+        f"{t['controller']} {t['failed']} of {t['runs']} runs failed an outcome ({t['collisions']} collisions, "
+        f"{t['lane_departures']} departures)" + (f", {t['supervisor_failed']} failed a supervisor check" if t["controller"] == "guarded"
+                                                 else "") for t in suite_totals(rows)))
     print(f"wrote {out}/runs.jsonl, suite.md, suite.json ({len(rows)} of {progress.planned} runs"
           + (f", {progress.resumed} resumed)" if progress.resumed else ")"))
     if progress.interrupted:
         print(f"interrupted by {progress.stopped_by}: the table holds the finished runs; run the same command with --resume to go on")
         return _interrupted_exit(args.stop)
     return 0 if all(r["passed"] for r in rows if r["controller"] == "guarded") else 1
+
+
+def _latest_suite() -> Path:
+    """``suite --resume`` without --out: the newest fearguard-out/suite-* folder (the one an interruption left)."""
+    found = sorted((p for p in OUT_ROOT.glob("suite-*") if (p / "runs.jsonl").is_file()), key=lambda p: p.stat().st_mtime)
+    if not found:
+        raise FearguardError(f"suite --resume: no earlier suite under {OUT_ROOT}/ to resume; give its folder with --out")
+    return found[-1]
+
+
+def cmd_scenarios(args: argparse.Namespace) -> int:
+    """The bundled scenarios: name and one-line description (``fearguard run NAME`` runs one)."""
+    from fearguard.sim.scenario import load_scenario
+    from fearguard.sim.suite import scenario_files
+
+    scenarios = [load_scenario(p) for p in scenario_files(args.folder)]
+    width = max((len(sc.name) for sc in scenarios), default=0)
+    for sc in scenarios:
+        print(f"{sc.name:<{width}}  {sc.description}")
+    return 0
 
 
 def cmd_verify(args: argparse.Namespace) -> int:
@@ -309,8 +372,9 @@ def cmd_duckietown(args: argparse.Namespace) -> int:
 
         print("\n".join(map_names()))
         return 0
-    if args.map is None or args.out is None:
-        raise FearguardError("duckietown: give a MAP (see --list-maps) and --out DIR")
+    if args.map is None:
+        raise FearguardError("duckietown: give a MAP (see --list-maps)")
+    out = args.out or _new_out("duckietown", args.map)
     try:
         options = DriveOptions(
             map_name=args.map, seconds=args.seconds, controller=args.baseline or "guarded", cruise_mps=args.cruise_mps,
@@ -321,10 +385,12 @@ def cmd_duckietown(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise FearguardError(f"duckietown: {exc}") from None
     with _Progress(f"duckietown {args.map}") as progress:
-        result = drive(options, args.out, progress.update)
+        result = drive(options, out, progress.update)
     print_drive(result.summary)
-    print(f"wrote {args.out}/log.jsonl, summary.json, drive.png" + (", timeline.png" if options.controller == "guarded" else "")
-          + (", annotated.mp4" if args.video else ""))
+    plots = (", drive.png" + (", timeline.png" if options.controller == "guarded" else "")) if options.plots else ""
+    print(f"wrote {out}/log.jsonl, summary.json{plots}")
+    if result.video_path is not None:
+        print(f"video {result.video_path}")
     if result.interrupted:
         print("interrupted: the log holds every step driven so far")
         return 130
@@ -335,10 +401,11 @@ def cmd_duckietown_suite(args: argparse.Namespace) -> int:
     """The development maps guarded / unguarded / expert, obstacles, domain randomisation → suite.md, suite.json."""
     from fearguard.worlds.duckietown.suite import run_suite
 
-    table = run_suite(args.out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds, jobs=args.jobs,
+    out = args.out or _new_out("duckietown-suite", f"{args.seeds}seeds")
+    table = run_suite(out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds, jobs=args.jobs,
                       on_run=print)
     print(table)
-    print(f"wrote {args.out}/suite.md, suite.json")
+    print(f"wrote {out}/suite.md, suite.json")
     return 0
 
 
@@ -368,8 +435,25 @@ def _out_folder(text: str) -> str:
     return text
 
 
+def _version() -> str:
+    """The installed distribution's version (pyproject.toml's), or a note when run from a source tree."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("fearguard")
+    except PackageNotFoundError:
+        return "(not installed: run from a source tree)"
+
+
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int, file: Any = None,
+                      line: str | None = None) -> None:
+    """warnings.showwarning for the command line: ``warning: message`` on stderr, no source line."""
+    print(f"warning: {message}", file=sys.stderr)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="fearguard", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="fearguard", description="a fuzzy, affective safety supervisor around your steering function")
+    parser.add_argument("--version", action="version", version=f"fearguard {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="a scripted drive through glare, occlusion, an obstacle and stale QR")
     demo.add_argument("--rules", default=None, help="rule file (default: the bundled model-car rules)")
@@ -381,7 +465,7 @@ def build_parser() -> argparse.ArgumentParser:
     check.set_defaults(func=cmd_check)
     plot = rsub.add_parser("plot", help="membership functions and fear surfaces as PNG")
     plot.add_argument("file", nargs="?", default=None)
-    plot.add_argument("--out", required=True, type=_out_folder, help="directory for the PNG files")
+    plot.add_argument("--out", type=_out_folder, default=None, help="directory for the PNG files " + OUT_HELP % "rules-plot")
     plot.set_defaults(func=cmd_plot)
     explain = rsub.add_parser("explain", help="fear, level, top rules and the command for given cues")
     explain.add_argument("--cues", required=True, help="e.g. lane_confidence=0.2,occlusion=0.8 (others calm)")
@@ -396,11 +480,17 @@ def build_parser() -> argparse.ArgumentParser:
     calibrate.add_argument("--square-m", type=float, default=1.0, help="side of one square in metres (does not change the intrinsics)")
     calibrate.add_argument("--mount-height-m", type=float, default=None, help="camera height above the ground (m), for ground ranges")
     calibrate.add_argument("--pitch-deg", type=float, default=0.0, help="camera pitch, positive = looking down (deg)")
-    calibrate.add_argument("--out", required=True, help="camera file to write (TOML), e.g. camera.toml")
+    calibrate.add_argument("--out", default=None, help="camera file to write (TOML), e.g. camera.toml "
+                           "(default: camera.toml in a new folder fearguard-out/calibrate-...-TIMESTAMP)")
     calibrate.set_defaults(func=cmd_calibrate)
     rp = sub.add_parser("replay", help="a recorded drive (video, image folder, Donkey tub) through the supervisor, open loop")
     rp.add_argument("recording", help="video file, folder of images, or Donkey Car tub folder")
-    rp.add_argument("--out", required=True, type=_out_folder, help="output folder (log.jsonl, summary.json, timeline.png, the video)")
+    rp.add_argument("--out", type=_out_folder, default=None,
+                    help="output folder (log.jsonl, summary.json, timeline.png, the video) " + OUT_HELP % "replay")
+    rp.add_argument("--vehicle", default=None, help="vehicle preset (" + ", ".join(PRESETS) + ") or vehicle.toml "
+                    "(default: VehicleLimits(), a 1:10 car capped at 2 m/s); the range sensor is what the sensor log has")
+    rp.add_argument("--steer", default=None, help="your steering function module:function, frame -> degrees "
+                    "(default: the built-in HoughLaneSteering)")
     rp.add_argument("--sensor-log", default=None, help="CSV or JSON Lines with t_s and sensor columns, aligned by time")
     rp.add_argument("--strict", action="store_true", help="reject a sensor log with any malformed line (default: report and skip)")
     rp.add_argument("--camera", default=None, help="camera.toml from `fearguard calibrate`")
@@ -416,21 +506,26 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--no-plots", action="store_true", help="skip timeline.png")
     rp.set_defaults(func=cmd_replay)
     run = sub.add_parser("run", help="one scenario closed loop: rendered frames → perception → supervisor → car")
-    run.add_argument("scenario", help="scenario file (TOML), e.g. scenarios/night.toml")
+    run.add_argument("scenario", help="a bundled scenario's name (e.g. night; `fearguard scenarios` lists them) or a scenario file")
     run.add_argument("--seed", type=_count(0), default=None, help="random seed >= 0 (default: the scenario's)")
     who = run.add_mutually_exclusive_group()
     who.add_argument("--unguarded", action="store_true", help="no supervisor: cruise speed, the estimator alone")
     who.add_argument("--baseline", choices=("unguarded", "crisp", "aeb"), default=None, help="a baseline speed rule instead of fearguard")
-    run.add_argument("--out", required=True, type=_out_folder, help="output folder")
+    run.add_argument("--out", type=_out_folder, default=None, help="output folder " + OUT_HELP % "run")
     run.add_argument("--video", action="store_true", help=VIDEO_HELP)
     run.set_defaults(func=cmd_run)
     suite = sub.add_parser("suite", help="every scenario guarded and with the baselines: a comparison table")
     suite.add_argument("folder", nargs="?", default=None, help="folder of scenario files (default: the bundled library)")
     suite.add_argument("--seeds", type=_count(1), default=10, help="seeds per scenario, >= 1 (default 10)")
-    suite.add_argument("--out", required=True, type=_out_folder, help="output folder for runs.jsonl, suite.md and suite.json")
-    suite.add_argument("--resume", action="store_true", help="skip the runs already in OUT/runs.jsonl (after an interruption)")
+    suite.add_argument("--out", type=_out_folder, default=None, help="output folder for runs.jsonl, suite.md and suite.json "
+                       + OUT_HELP % "suite")
+    suite.add_argument("--resume", action="store_true", help="skip the runs already in OUT/runs.jsonl (after an interruption; "
+                       "without --out: the newest fearguard-out/suite-* folder)")
     suite.add_argument("--verbose", action="store_true", help="print each run as it finishes")
     suite.set_defaults(func=cmd_suite)
+    listing = sub.add_parser("scenarios", help="list the bundled scenarios (name and what each tests)")
+    listing.add_argument("folder", nargs="?", default=None, help="another folder of scenario files (default: the bundled library)")
+    listing.set_defaults(func=cmd_scenarios)
     verify = sub.add_parser("verify", help="search every safety invariant with hypothesis for your rules, vehicle and steering")
     verify.add_argument("--rules", default=None, help="rule file (default: the bundled model-car rules)")
     verify.add_argument("--vehicle", default=None, help="vehicle preset name or vehicle.toml (default: VehicleLimits())")
@@ -443,7 +538,8 @@ def build_parser() -> argparse.ArgumentParser:
     verify.set_defaults(func=cmd_verify)
     dt = sub.add_parser("duckietown", help="drive a Duckiebot in gym-duckietown (needs `bash .ci/duckietown.sh`)")
     dt.add_argument("map", nargs="?", default=None, help="map name, e.g. loop_empty, small_loop, zigzag_dists, straight_road")
-    dt.add_argument("--out", default=None, help="output folder (log.jsonl, summary.json, drive.png, timeline.png, annotated.mp4)")
+    dt.add_argument("--out", default=None, help="output folder (log.jsonl, summary.json, drive.png, timeline.png, the video) "
+                    + OUT_HELP % "duckietown")
     dt.add_argument("--seconds", type=float, default=60.0, help="simulated duration (default 60)")
     dt.add_argument("--cruise-mps", type=float, default=0.2, help="cruise speed (default 0.2 m/s)")
     dt.add_argument("--obstacle", choices=("duck", "cone", "duckiebot"), default=None, help="a static obstacle on the lane ahead")
@@ -456,12 +552,13 @@ def build_parser() -> argparse.ArgumentParser:
     dt.add_argument("--seed", type=int, default=0, help="random seed (domain randomisation, sensor noise)")
     dt.add_argument("--width", type=int, default=320, help="camera width in pixels, 4:3 (default 320; 160 is faster)")
     dt.add_argument("--rules", default=None, help="rule file (default: the bundled rules/duckiebot.toml)")
-    dt.add_argument("--video", action="store_true", help="also write annotated.mp4")
+    dt.add_argument("--video", action="store_true", help=VIDEO_HELP)
     dt.add_argument("--no-plots", action="store_true", help="skip drive.png and timeline.png")
     dt.add_argument("--list-maps", action="store_true", help="print the maps the simulator ships and exit")
     dt.set_defaults(func=cmd_duckietown)
     dts = sub.add_parser("duckietown-suite", help="the development maps guarded and with both baselines, obstacles, 10 randomised seeds")
-    dts.add_argument("--out", required=True, help="output folder (one folder per run, suite.md, suite.json)")
+    dts.add_argument("--out", default=None,
+                     help="output folder (one folder per run, suite.md, suite.json) " + OUT_HELP % "duckietown-suite")
     dts.add_argument("--seconds", type=float, default=60.0, help="duration of each drive (default 60)")
     dts.add_argument("--seeds", type=int, default=10, help="domain-randomised seeds (default 10)")
     dts.add_argument("--maps", nargs="*", default=None, help="lane maps (default: loop_empty small_loop zigzag_dists straight_road)")
@@ -473,7 +570,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None, *, exiting: bool = False) -> int:
     """Run one command; ``exiting``: the process ends right after (signals are then ignored, not restored)."""
-    with stop_on_signals(ignore_after=exiting) as stop:  # before anything else: a Ctrl-C from here on is ours
+    with stop_on_signals(ignore_after=exiting) as stop, warnings.catch_warnings():  # before anything else: a Ctrl-C is ours
+        warnings.showwarning = _one_line_warning
         try:
             args = build_parser().parse_args(argv)
             args.stop = stop

@@ -142,9 +142,16 @@ def load_vehicle(path: str | Path) -> VehicleLimits:
 
 
 def vehicle_from_table(data: dict[str, Any], path: str | Path, src: TomlSource | None = None) -> VehicleLimits:
-    """Validate a vehicle table (as read from TOML); errors name the file, the key and (with ``src``) its line."""
+    """Validate a vehicle table (as read from TOML); errors name the file, the key and (with ``src``) its line.
+
+    The keys stand at the top level; a file whose only key is a ``[vehicle]`` table (a scenario's layout) is read
+    the same way.
+    """
+    key_path = ""
+    if set(data) == {"vehicle"} and isinstance(data["vehicle"], dict):
+        data, key_path = data["vehicle"], "vehicle"
     known = {f.name: f for f in fields(VehicleLimits)}
-    table = Table(src or TomlSource(path, "", VehicleFileError), data, "", ("preset", *known))
+    table = Table(src or TomlSource(path, "", VehicleFileError), data, key_path, ("preset", *known))
     base_name = table.string("preset", "camera_only", choices=tuple(PRESETS))
     values: dict[str, Any] = {}
     for key in data:
@@ -162,10 +169,15 @@ def vehicle_from_table(data: dict[str, Any], path: str | Path, src: TomlSource |
         raise VehicleFileError(path, "values", str(exc)) from None
 
 
-def resolve_vehicle(spec: str) -> VehicleLimits:
-    """``--vehicle PRESET|FILE``: a preset name, else a vehicle.toml path."""
-    if spec in PRESETS:
-        return PRESETS[spec]
-    if not Path(spec).exists():
-        raise VehicleFileError(spec, "--vehicle", f"neither a preset ({', '.join(PRESETS)}) nor an existing file")
+def resolve_vehicle(spec: VehicleLimits | str | Path | None) -> VehicleLimits:
+    """``--vehicle PRESET|FILE`` (the one resolver: CLI, testing kit): None = ``VehicleLimits()``, a VehicleLimits as
+    it is, a preset name, else a vehicle.toml path."""
+    if spec is None:
+        return VehicleLimits()
+    if isinstance(spec, VehicleLimits):
+        return spec
+    if str(spec) in PRESETS:
+        return PRESETS[str(spec)]
+    if not Path(spec).is_file():
+        raise VehicleFileError(spec, "--vehicle", f"neither a preset ({', '.join(PRESETS)}) nor an existing vehicle file")
     return load_vehicle(spec)

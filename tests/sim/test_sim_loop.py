@@ -27,7 +27,7 @@ def test_the_library_has_every_scenario_the_issue_asks_for():
 @pytest.mark.parametrize("path", SCENARIOS, ids=[p.stem for p in SCENARIOS])
 def test_guarded_run_meets_every_expectation(path: Path):
     result = run_scenario(load_scenario(path))
-    failed = [f"{e.name}: {e.detail}" for e in result.expectations if not e.ok]
+    failed = [f"{e.name}: {e.detail}" for e in result.expectations if e.failed or e.ok is None]
     assert not failed, failed
     assert result.metrics.collisions == 0 and result.metrics.lane_departures == 0
 
@@ -86,3 +86,10 @@ def test_suite_table_compares_guarded_with_baselines(tmp_path: Path):
     assert {r["controller"] for r in rows} == {"guarded", "unguarded", "crisp", "aeb"}
     table = suite_markdown(rows)
     assert "| stationary_obstacle |" in table and "unguarded" in table.splitlines()[0]
+    by = {r["controller"]: r for r in rows}
+    assert by["guarded"]["not_applicable"] == [] and by["guarded"]["supervisor_checks"]
+    for baseline in ("unguarded", "crisp", "aeb"):  # the mode checks are n/a for a baseline, not failures
+        assert by[baseline]["not_applicable"] == by["guarded"]["supervisor_checks"]
+        assert by[baseline]["supervisor_failed"] == [] and "mode_by" not in " ".join(by[baseline]["failed"])
+    assert "| unguarded | 1 | 1 | 1 |" in table  # totals: one run, one outcome failure, one collision
+    assert "supervisor-only checks (guarded; n/a for baselines)" in table

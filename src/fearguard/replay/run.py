@@ -1,7 +1,7 @@
 """Replay a recorded drive open loop: the recording's motion is fixed; fearguard says where and why it would slow.
 
 Frames (video, image folder or Donkey tub) and an optional sensor log aligned by time go through the
-wrapped steering estimator (HoughLaneSteering) and the supervisor, frame by frame. Outputs in the
+wrapped steering estimator (HoughLaneSteering, or the caller's) and the supervisor, frame by frame. Outputs in the
 out folder, through ``recorder.Recorder``: ``log.jsonl`` (one flushed line per frame), ``summary.json``,
 ``timeline.png`` and, if asked, the annotated video (``annotated.mp4``; ``annotated.avi`` without PyAV).
 Sensors are what the recording has: the car has an ultrasonic when the sensor log has a range or echo
@@ -47,7 +47,8 @@ class ReplayOptions:
     every: int = 1
     video: bool = False
     plots: bool = True
-    vehicle: VehicleLimits = field(default_factory=VehicleLimits)
+    vehicle: VehicleLimits = field(default_factory=VehicleLimits)  # its range sensor and QR are what the recording has (below)
+    steer: Callable[[Any], float] | None = None  # the wrapped steering function, frame -> degrees (None: HoughLaneSteering)
 
 
 @dataclass(frozen=True)
@@ -76,7 +77,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     camera: CameraModel | None = load_camera(options.camera) if options.camera else None
     has_us = log_data is not None and not options.no_ultrasonic and bool({"ultrasonic_range_m", "echo_s"} & set(log_data.columns))
     vehicle = replace(options.vehicle, has_ultrasonic=has_us, has_qr_localisation=options.qr_localisation)
-    steer = HoughLaneSteering(camera=camera, fps=source.fps)
+    steer = options.steer if options.steer is not None else HoughLaneSteering(camera=camera, fps=source.fps)
     guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera)
     start = parse_position(options.start, source.fps) if options.start else 0
     stop_at = parse_position(options.stop, source.fps) if options.stop else None

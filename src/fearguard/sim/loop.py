@@ -76,8 +76,11 @@ class RunResult:
 
     @property
     def passed(self) -> bool:
-        """Every expectation holds, over a run that was not cut short (an interrupted run never passes)."""
-        return not self.interrupted and all(e.ok for e in self.expectations)
+        """Every applicable expectation holds, over a run that was not cut short (an interrupted run never passes).
+
+        A supervisor-only expectation (``mode_by``...) does not apply to a baseline (``ok`` None): it neither passes nor fails it.
+        """
+        return not self.interrupted and not any(e.failed for e in self.expectations)
 
     @property
     def summary(self) -> dict[str, Any]:

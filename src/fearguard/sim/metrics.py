@@ -8,6 +8,9 @@ closing) become None in the summary, so it serialises as plain JSON (``RunMetric
 
 Expectations are a table: one checker per expectation name, run in ``EXPECTATION_NAMES`` order for the
 expectations a scenario sets; threshold expectations are rows of (metric, at least / at most, unit).
+Outcome expectations (collisions, departures, speeds, gaps) apply to every controller; the
+supervisor-only ones (``SUPERVISOR_ONLY``: modes, strategies, emergency counts) are not applicable
+(``ok`` None) to a baseline, which has no modes: they neither fail it nor pass it vacuously.
 """
 
 from __future__ import annotations
@@ -28,8 +31,8 @@ MODES = ("NORMAL", "CAUTION", "EMERGENCY")
 STOPPED_SPEED_MPS = 0.02  # [m/s] at or below this the car counts as stopped
 SPEED_TOLERANCE_MPS = 1e-6  # [m/s] a speed cap is met up to floating-point rounding
 TIME_TOLERANCE_S = 1e-9  # [s] "by t" / "not before t" compare times up to rounding
-NEEDS_SUPERVISOR = "no supervisor mode recorded (unguarded run): this expectation needs a guarded run"
-NO_FALSE_ALARM = "no supervisor (unguarded run): no mode, so no false alarm"
+NOT_APPLICABLE = "n/a: judges the supervisor's mode, and this controller has none (a baseline)"
+SUPERVISOR_ONLY = frozenset({"no_emergency", "max_emergency_entries", "max_mode_switches", "mode_by", "strategy_by", "mode_not_before"})
 
 
 @dataclass(frozen=True)
@@ -120,9 +123,20 @@ class RunMetrics:
 
 @dataclass(frozen=True)
 class ExpectationResult:
+    """One expectation checked: ``ok`` None = not applicable (a supervisor-only check on a baseline run)."""
+
     name: str
-    ok: bool
+    ok: bool | None
     detail: str
+
+    @property
+    def failed(self) -> bool:
+        return self.ok is False
+
+    @property
+    def outcome(self) -> bool:
+        """An outcome of the drive (collision, departure, speed, gap...) rather than a judgement of the supervisor's mode."""
+        return self.name.split(" ")[0] not in SUPERVISOR_ONLY
 
 
 class Metrics:
@@ -210,11 +224,11 @@ def _threshold(name: str, metric: str, at_least: bool, what: str, none: str | No
 
 
 def _supervised(name: str, check: Callable[[Any, RunMetrics], tuple[bool, str]]) -> Check:
-    """A false-alarm limit: it holds vacuously for a car without a supervisor (no modes to switch)."""
+    """A false-alarm limit on the supervisor's modes: not applicable to a car without a supervisor."""
 
     def run_check(want: Any, run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
         if not _guarded(rows):
-            return [ExpectationResult(name, True, NO_FALSE_ALARM)]
+            return [ExpectationResult(name, None, NOT_APPLICABLE)]
         ok, detail = check(want, run)
         return [ExpectationResult(name, bool(ok), detail)]
 
@@ -255,7 +269,7 @@ def _reached_by(field: str) -> Check:
             value = getattr(want, field)
             name = f"{field}_by {value} by {want.t_s:g} s"
             if not _guarded(rows):
-                out.append(ExpectationResult(name, False, NEEDS_SUPERVISOR))
+                out.append(ExpectationResult(name, None, NOT_APPLICABLE))
                 continue
             first = next((r.t_s for r in rows if getattr(r, field) == value), None)
             detail = f"first {value} at {first:.2f} s" if first is not None else f"never {value}"
@@ -270,7 +284,7 @@ def _mode_not_before(wants: Sequence[Any], run: RunMetrics, rows: Sequence[Row])
     for want in wants:
         name = f"mode_not_before {want.mode} before {want.t_s:g} s"
         if not _guarded(rows):
-            out.append(ExpectationResult(name, False, NEEDS_SUPERVISOR))
+            out.append(ExpectationResult(name, None, NOT_APPLICABLE))
             continue
         early = next((r.t_s for r in rows if r.mode == want.mode and r.t_s < want.t_s - TIME_TOLERANCE_S), None)
         out.append(ExpectationResult(name, early is None, f"{want.mode} already at {early:.2f} s" if early is not None

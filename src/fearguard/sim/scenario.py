@@ -94,6 +94,22 @@ _ROAD_KEYS = ("lane_width_m", "marking_width_m", "dash_length_m", "dash_gap_m", 
 _SEGMENT_KEYS = ("kind", "length_m", "radius_m", "turn", "left_marking", "left_colour", "right_marking", "right_colour", "surface")
 
 # -- loading -----------------------------------------------------------------------------------
+BUNDLED = Path(__file__).resolve().parents[1] / "scenarios"  # the scenario library shipped in the package
+
+
+def find_scenario(spec: str | Path) -> Path:
+    """A scenario's file from what a user types: a path, or the name of a bundled scenario (``night``)."""
+    path = Path(spec)
+    if path.is_file() or path.suffix == ".toml" or len(path.parts) > 1:
+        return path  # a path (load_scenario names it when it is missing)
+    bundled = BUNDLED / f"{path.name}.toml"
+    if bundled.is_file():
+        return bundled
+    names = ", ".join(p.stem for p in sorted(BUNDLED.glob("*.toml")))
+    raise ScenarioError(str(spec), "", f"no such file, and no bundled scenario of that name; bundled: {names} "
+                        "(`fearguard scenarios` lists them)")
+
+
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario file; a wrong file raises ScenarioError naming the file, line and key."""
     path = Path(path)

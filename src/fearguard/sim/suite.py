@@ -3,8 +3,10 @@
 ``run_to_folder`` writes log.jsonl (flushed per frame), summary.json, timeline.png, trajectory.png and
 (optionally) the annotated video. ``run_suite`` runs without per-frame files and returns rows for the table,
 appending each finished run to runs.jsonl as it goes (an interrupted suite resumes from it);
-``suite_markdown`` renders them (guarded vs unguarded vs crisp vs aeb: failures, collisions, lane
-departures, mean speed, emergency entries).
+``suite_markdown`` renders them: outcomes for every controller (guarded vs unguarded vs crisp vs aeb:
+outcome failures, collisions, lane departures, route completion, speed, first stop; totals with false
+alarms on the hazard-free scenarios), and apart from them the supervisor-only checks, which a baseline
+cannot be judged by.
 """
 
 from __future__ import annotations
@@ -22,10 +24,9 @@ from fearguard.report import JsonlLog, read_jsonl
 from fearguard.sim.loop import CONTROLLERS, RunResult, run_scenario
 from fearguard.sim.metrics import Row
 from fearguard.sim.road import Road
-from fearguard.sim.scenario import Scenario, load_scenario
+from fearguard.sim.scenario import BUNDLED, Scenario, load_scenario
 from fearguard.timeline import plot_timeline
 
-BUNDLED = Path(__file__).resolve().parents[1] / "scenarios"
 BENIGN = ("clear_straight", "s_curves")  # scenarios without a hazard: the false-alarm check
 
 
@@ -105,25 +106,40 @@ class SuiteProgress:
     stopped_by: str | None = None
 
 
-def suite_row(result: RunResult) -> dict[str, Any]:
-    """One run's line in runs.jsonl and in the table."""
+def suite_row(result: RunResult, route_m: float | None = None) -> dict[str, Any]:
+    """One run's line in runs.jsonl and in the table: outcome metrics for every controller, the checks apart.
+
+    ``failed``: outcome expectations that failed (collision, departure, speed, gap...), for every controller;
+    ``supervisor_failed``: supervisor-only expectations that failed (guarded runs; a baseline has none to fail);
+    ``not_applicable``: supervisor-only expectations a baseline cannot be judged by. ``route_completion``: the
+    share of the route driven (``route_m``: its length); ``first_stop_t_s``: when the car first stood still.
+    """
     m = result.metrics
+    stops = [s.t_s for s in m.stops if s.t_s > 0.0]  # a car that starts at rest has not "stopped" at t = 0
     return {
         "scenario": result.scenario, "controller": result.controller, "seed": result.seed, "passed": result.passed,
         "collisions": m.collisions, "lane_departures": m.lane_departures, "mean_speed_mps": m.mean_speed_mps,
-        "emergency_entries": m.emergency_entries, "failed": [e.name for e in result.expectations if not e.ok],
+        "distance_m": m.distance_m, "route_completion": (min(1.0, max(0.0, m.final_s_m / route_m))
+                                                         if route_m and m.final_s_m is not None else None),
+        "first_stop_t_s": stops[0] if stops else None, "emergency_entries": m.emergency_entries,
+        "failed": [e.name for e in result.expectations if e.failed and e.outcome],
+        "supervisor_failed": [e.name for e in result.expectations if e.failed and not e.outcome],
+        "supervisor_checks": [e.name for e in result.expectations if not e.outcome],
+        "not_applicable": [e.name for e in result.expectations if e.ok is None],
     }
 
 
 def run_suite(
     files: Iterable[Path], seeds: int, controllers: Sequence[str] = CONTROLLERS, on_run: Callable[[str], None] | None = None,
     runs_log: Path | None = None, resume: bool = False, stop: StopSignal | None = None,
+    on_progress: Callable[[int, int], None] | None = None,
 ) -> SuiteProgress:
     """Every scenario × seed × controller, no per-frame files; one row per finished run.
 
     With ``runs_log`` each finished run is appended to it as a flushed JSON line (so an interrupted
     suite keeps every finished run); with ``resume`` the runs already in it are skipped. A run cut
-    short by ``stop`` is not a result: it is left out, and the suite stops there.
+    short by ``stop`` is not a result: it is left out, and the suite stops there. ``on_progress(done, planned)``
+    is called after each run (resumed runs count as done).
     """
     if not (isinstance(seeds, int) and seeds >= 1):
         raise ValueError(f"seeds must be a whole number >= 1, got {seeds!r}")
@@ -145,15 +161,19 @@ def run_suite(
             seed = scenario.seed + k
             if (scenario.name, seed, controller) in keys:
                 continue
+            if on_progress is not None:
+                on_progress(len(rows), len(plan))
             result = run_scenario(scenario, seed, controller, stop=stop)
             if result.interrupted:
                 break
-            row = suite_row(result)
+            row = suite_row(result, Road(scenario.road).length_m)
             rows.append(row)
             if log is not None:
                 log.write(row)
             if on_run is not None:
                 on_run(f"{scenario.name} seed {seed} {controller}: {'pass' if result.passed else 'FAIL'}")
+            if on_progress is not None:
+                on_progress(len(rows), len(plan))
     finally:
         if log is not None:
             log.close()
@@ -168,42 +188,92 @@ def _finished_runs(path: Path) -> list[dict[str, Any]]:
 
 
 def suite_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Per scenario and controller: runs, failed runs, collisions, lane departures, mean speed, emergency entries."""
+    """Per scenario and controller: runs, outcome failures, supervisor-check failures, collisions, departures,
+    distance (summed), route completion, first stop, mean speed, emergency entries (rows of an older runs.jsonl count
+    what they hold)."""
     table: dict[tuple[str, str], dict[str, Any]] = {}
     for r in rows:
-        t = table.setdefault((r["scenario"], r["controller"]), {"scenario": r["scenario"], "controller": r["controller"], "runs": 0,
-                                                                 "failed": 0, "collisions": 0, "lane_departures": 0,
-                                                                 "speeds": [], "emergency_entries": 0})
+        t = table.setdefault((r["scenario"], r["controller"]), {
+            "scenario": r["scenario"], "controller": r["controller"], "runs": 0, "failed": 0, "supervisor_failed": 0,
+            "supervisor_checks": r.get("supervisor_checks", []), "collisions": 0, "lane_departures": 0, "emergency_entries": 0,
+            "false_alarm_runs": 0, "distance_m": 0.0, "speeds": [], "completion": [], "stops": []})
         t["runs"] += 1
-        t["failed"] += not r["passed"]
+        t["failed"] += bool(r["failed"]) if "supervisor_failed" in r else not r["passed"]
+        t["supervisor_failed"] += bool(r.get("supervisor_failed"))
         t["collisions"] += r["collisions"]
         t["lane_departures"] += r["lane_departures"]
         t["emergency_entries"] += r["emergency_entries"]
-        if r["mean_speed_mps"] is not None:
-            t["speeds"].append(r["mean_speed_mps"])
+        t["distance_m"] += r.get("distance_m") or 0.0
+        t["false_alarm_runs"] += r["scenario"] in BENIGN and bool(r["emergency_entries"] or r.get("first_stop_t_s") is not None)
+        for key, values in (("mean_speed_mps", "speeds"), ("route_completion", "completion"), ("first_stop_t_s", "stops")):
+            if r.get(key) is not None:
+                t[values].append(r[key])
     out = []
     for t in table.values():
-        speeds = t.pop("speeds")
+        speeds, completion, stops = t.pop("speeds"), t.pop("completion"), t.pop("stops")
         t["mean_speed_mps"] = float(np.mean(speeds)) if speeds else None
+        t["route_completion"] = float(np.mean(completion)) if completion else None
+        t["stopped_runs"], t["mean_first_stop_t_s"] = len(stops), (float(np.mean(stops)) if stops else None)
         out.append(t)
     return out
 
 
+def suite_totals(rows: Sequence[dict[str, Any]], controllers: Sequence[str] = CONTROLLERS) -> list[dict[str, Any]]:
+    """Per controller over every scenario: runs, outcome failures, collisions, departures, route completion, false alarms,
+    and progress: the distance driven as a share of the unguarded car's over the same runs."""
+    table = suite_table(rows)
+    unguarded = sum(t["distance_m"] for t in table if t["controller"] == "unguarded")
+    out = []
+    for c in controllers:
+        mine = [t for t in table if t["controller"] == c]
+        if not mine:
+            continue
+        completion = [t["route_completion"] for t in mine if t["route_completion"] is not None]
+        benign = sum(t["runs"] for t in mine if t["scenario"] in BENIGN)
+        out.append({"controller": c, "runs": sum(t["runs"] for t in mine), "failed": sum(t["failed"] for t in mine),
+                    "collisions": sum(t["collisions"] for t in mine), "lane_departures": sum(t["lane_departures"] for t in mine),
+                    "route_completion": float(np.mean(completion)) if completion else None,
+                    "progress": sum(t["distance_m"] for t in mine) / unguarded if unguarded > 0 else None,
+                    "false_alarm_runs": sum(t["false_alarm_runs"] for t in mine), "benign_runs": benign,
+                    "supervisor_failed": sum(t["supervisor_failed"] for t in mine) if c == "guarded" else None})
+    return out
+
+
+def _percent(share: float | None) -> str:
+    return f"{100 * share:.0f} %" if share is not None else "–"
+
+
+def _outcome_cell(t: dict[str, Any] | None) -> str:
+    if t is None:
+        return "–"
+    verdict = "pass" if t["failed"] == 0 else f"**{t['failed']}/{t['runs']} fail**"
+    speed = f"{t['mean_speed_mps']:.2f} m/s" if t["mean_speed_mps"] is not None else "–"
+    stop = f", stop {t['mean_first_stop_t_s']:.1f} s" if t["mean_first_stop_t_s"] is not None else ""
+    return f"{verdict}; coll {t['collisions']}, dep {t['lane_departures']}, {t['distance_m'] / t['runs']:.1f} m, {speed}{stop}"
+
+
 def suite_markdown(rows: Sequence[dict[str, Any]], controllers: Sequence[str] = CONTROLLERS) -> str:
-    """The comparison table: one line per scenario, for each controller 'failed/runs, collisions, departures, speed'."""
+    """The comparison: outcomes for every controller (one line per scenario, then totals), the supervisor-only checks apart.
+
+    Outcome cell: runs failing an outcome expectation, collisions, lane departures, mean distance driven, mean
+    speed and the mean time of the first stop (runs that stopped). The supervisor checks (modes, strategies, emergency
+    counts) judge fearguard's modes: guarded only, n/a for the baselines.
+    """
     table = {(t["scenario"], t["controller"]): t for t in suite_table(rows)}
     scenarios = list(dict.fromkeys(r["scenario"] for r in rows))
-    head = "| scenario | " + " | ".join(controllers) + " |"
-    lines = [head, "|" + "---|" * (len(controllers) + 1)]
-    for name in scenarios:
-        cells = []
-        for c in controllers:
-            t = table.get((name, c))
-            if t is None:
-                cells.append("–")
-                continue
-            speed = f"{t['mean_speed_mps']:.2f} m/s" if t["mean_speed_mps"] is not None else "–"
-            verdict = "pass" if t["failed"] == 0 else f"**{t['failed']}/{t['runs']} fail**"
-            cells.append(f"{verdict}; coll {t['collisions']}, dep {t['lane_departures']}, emerg {t['emergency_entries']}, {speed}")
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    lines = ["| scenario | " + " | ".join(controllers) + " |", "|" + "---|" * (len(controllers) + 1)]
+    lines += [f"| {name} | " + " | ".join(_outcome_cell(table.get((name, c))) for c in controllers) + " |" for name in scenarios]
+    lines += ["", "| controller | runs | outcome failures | collisions | lane departures | progress (of unguarded) | route completion "
+              f"| false alarms ({', '.join(BENIGN)}) |", "|---|---|---|---|---|---|---|---|"]
+    for t in suite_totals(rows, controllers):
+        alarms = f"{t['false_alarm_runs']}/{t['benign_runs']} runs" if t["benign_runs"] else "–"
+        lines.append(f"| {t['controller']} | {t['runs']} | {t['failed']} | {t['collisions']} | {t['lane_departures']} | "
+                     f"{_percent(t['progress'])} | {_percent(t['route_completion'])} | {alarms} |")
+    checked = [(name, table[(name, "guarded")]) for name in scenarios
+               if (name, "guarded") in table and table[(name, "guarded")]["supervisor_checks"]]
+    if checked:
+        lines += ["", "| scenario | supervisor-only checks (guarded; n/a for baselines) | guarded |", "|---|---|---|"]
+        for name, t in checked:
+            verdict = "pass" if t["supervisor_failed"] == 0 else f"**{t['supervisor_failed']}/{t['runs']} fail**"
+            lines.append(f"| {name} | {', '.join(t['supervisor_checks'])} | {verdict} |")
     return "\n".join(lines) + "\n"

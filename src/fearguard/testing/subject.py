@@ -9,10 +9,7 @@ a loaded ``RuleBase``; None = the bundled default), a ``VehicleLimits`` (or a pr
 
 from __future__ import annotations
 
-import importlib
 import math
-import sys
-import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -20,8 +17,11 @@ from typing import Any
 
 import fearguard as fg
 from fearguard.errors import FearguardError
+from fearguard.steer_import import resolve_steer
 from fearguard.testing.frames import frame_pixels
 from fearguard.testing.history import History, SteerRaises, Step
+from fearguard.vehicle import resolve_vehicle as vehicle_by_name
+from fearguard.vehicle import vehicle_from_table
 
 
 class SetupError(FearguardError):
@@ -62,10 +62,9 @@ def _json_number(v: Any) -> Any:
 
 def presets() -> dict[str, fg.VehicleLimits]:
     """The named vehicle presets of ``fearguard.vehicle`` (PRESETS), plus "default" = ``VehicleLimits()``."""
-    from fearguard import vehicle as vehicle_module
+    from fearguard.vehicle import PRESETS
 
-    found = getattr(vehicle_module, "PRESETS", {})
-    return {"default": fg.VehicleLimits(), **dict(found)}
+    return {"default": fg.VehicleLimits(), **dict(PRESETS)}
 
 
 def distinct_presets() -> dict[str, fg.VehicleLimits]:
@@ -78,16 +77,9 @@ def distinct_presets() -> dict[str, fg.VehicleLimits]:
 
 
 def vehicle_from_mapping(data: dict[str, Any], where: str) -> fg.VehicleLimits:
-    """A VehicleLimits from a table of its fields; unknown keys and bad values name the key."""
-    known = {f.name for f in fields(fg.VehicleLimits)}
-    unknown = sorted(set(data) - known)
-    if unknown:
-        raise SetupError(f"{where}: unknown vehicle key(s) {unknown}; known keys: {', '.join(sorted(known))}")
-    values = {k: (float(v) if v in ("inf", "-inf") else v) for k, v in data.items()}
-    try:
-        return fg.VehicleLimits(**values)
-    except (ValueError, TypeError) as exc:
-        raise SetupError(f"{where}: {exc}") from None
+    """A VehicleLimits from a table of its fields (a counterexample header: infinities as "inf"); errors name the key."""
+    values = {k: (float(v) if v in ("inf", "-inf") else v) for k, v in data.items() if v is not None}  # None: the default
+    return vehicle_from_table(values, where)
 
 
 TYRE_GRIP_MPS2 = 9.81  # [m/s²] μ = 1 on dry asphalt: the hardest braking tyres deliver without aerodynamic downforce
@@ -112,55 +104,13 @@ def check_honourable(car: fg.VehicleLimits, where: str) -> None:
 
 
 def resolve_vehicle(vehicle: fg.VehicleLimits | str | Path | None) -> tuple[fg.VehicleLimits, str]:
-    """A VehicleLimits and its name from a value, a preset name or a vehicle.toml path."""
-    if vehicle is None:
+    """A VehicleLimits and its name from a value, "default", a preset name or a vehicle.toml path
+    (``fearguard.vehicle.resolve_vehicle`` decides; this adds the name the kit's reports print)."""
+    if vehicle is None or (isinstance(vehicle, str) and vehicle == "default"):
         return fg.VehicleLimits(), "default"
     if isinstance(vehicle, fg.VehicleLimits):
         return vehicle, "given"
-    known = presets()
-    if str(vehicle) in known:
-        return known[str(vehicle)], str(vehicle)
-    path = Path(vehicle)
-    loader = getattr(importlib.import_module("fearguard.vehicle"), "load_vehicle", None)
-    if loader is not None and path.suffix == ".toml":
-        return loader(path), str(path)
-    if not path.is_file():
-        raise SetupError(f"--vehicle {vehicle}: neither a preset ({', '.join(known)}) nor an existing vehicle file")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise SetupError(f"{path}: cannot be read as a vehicle TOML file ({exc})") from None
-    table = data.get("vehicle", data)
-    if not isinstance(table, dict):
-        raise SetupError(f"{path}, key vehicle: must be a table of VehicleLimits fields")
-    return vehicle_from_mapping(table, str(path)), str(path)
-
-
-def resolve_steer(steer: Callable[[Any], Any] | str | None) -> tuple[Callable[[Any], Any] | None, str]:
-    """A steering function from a callable or ``module:function`` (a class is instantiated without arguments)."""
-    if steer is None:
-        return None, "scripted"
-    if callable(steer):
-        return steer, getattr(steer, "__qualname__", type(steer).__name__)
-    module_name, sep, attr = str(steer).partition(":")
-    if not sep or not module_name or not attr:
-        raise SetupError(f"--steer {steer!r}: expected module:function, e.g. my_pilot:steer")
-    if "" not in sys.path and "." not in sys.path:
-        sys.path.insert(0, "")  # the user's own module in the working folder
-    try:
-        module = importlib.import_module(module_name)
-    except Exception as exc:  # the user's module: any import failure is a setup error for them to fix
-        raise SetupError(f"--steer {steer}: cannot import {module_name!r} ({type(exc).__name__}: {exc})") from None
-    obj: Any = module
-    for part in attr.split("."):
-        obj = getattr(obj, part, None)
-        if obj is None:
-            raise SetupError(f"--steer {steer}: {module_name!r} has no {attr!r}")
-    if isinstance(obj, type):
-        obj = obj()
-    if not callable(obj):
-        raise SetupError(f"--steer {steer}: {attr!r} is not callable (a function frame -> degrees)")
-    return obj, str(steer)
+    return vehicle_by_name(vehicle), str(vehicle)
 
 
 class _NotCalled:

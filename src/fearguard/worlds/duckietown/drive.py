@@ -87,6 +87,7 @@ class DriveResult:
     summary: dict[str, Any]
     out_dir: Path | None
     interrupted: bool
+    video_path: Path | None = None  # the annotated video as written (annotated.mp4, or annotated.avi without PyAV)
 
 
 def drive(options: DriveOptions, out_dir: str | Path | None = None,
@@ -181,7 +182,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
         if stats.supervised_frames:
             recorder.plot_timeline(title, with_speed=True)
         plot_drive(read_jsonl(out / "log.jsonl"), out / "drive.png", title)
-    return DriveResult(summary, out, interrupted)
+    return DriveResult(summary, out, interrupted, recorder.video_path)
 
 
 def _cause(cmd: Command | None) -> str | None:

@@ -1,0 +1,118 @@
+"""The command line fits a user's habits (issue 15 item 4): --version, bundled scenarios by name and listed,
+--out optional (a timestamped folder under ./fearguard-out/, printed), replay with your steering function and
+vehicle, warnings as one line, the suite's totals and its honest split of outcomes and supervisor checks."""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+
+import pytest
+
+from fearguard.cli import main
+from fearguard.errors import ScenarioError
+from fearguard.sim.scenario import BUNDLED, find_scenario, load_scenario
+from fearguard.sim.suite import scenario_files
+
+VIDEO = "road/video/solidWhiteRight.mp4"
+SHORT = "name = 'short'\nduration_s = 1.0\n[[road.segments]]\nkind = 'straight'\nlength_m = 40.0\n[expect]\nno_collision = true\n"
+
+
+def test_version_prints_the_package_version(capsys) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert re.fullmatch(r"fearguard (\d+\.\d+\.\d+.*|\(not installed: run from a source tree\))\n", capsys.readouterr().out)
+
+
+def test_scenarios_lists_every_bundled_one_with_its_description(capsys) -> None:
+    assert main(["scenarios"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == len(scenario_files())
+    for line, path in zip(lines, scenario_files(), strict=True):
+        sc = load_scenario(path)
+        assert line.split()[0] == sc.name and line.endswith(sc.description) and sc.description
+
+
+def test_a_bundled_scenario_is_found_by_name_and_a_path_stays_a_path(tmp_path: Path, monkeypatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert find_scenario("night") == BUNDLED / "night.toml"
+    assert find_scenario("other/night.toml") == Path("other/night.toml")  # a path is never swapped for a bundled file
+    (tmp_path / "night").write_text(SHORT)
+    assert find_scenario("night") == Path("night")  # a file of that name in the working folder wins
+    with pytest.raises(ScenarioError, match="no bundled scenario of that name; bundled: camera_blackout"):
+        find_scenario("nigth")
+
+
+def test_run_by_name_without_out_writes_a_timestamped_folder_and_says_where(tmp_path: Path, monkeypatch, capsys) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "short.toml").write_text(SHORT)
+    assert main(["run", "short.toml", "--baseline", "crisp"]) == 0
+    out = capsys.readouterr().out
+    folders = list((tmp_path / "fearguard-out").iterdir())
+    assert len(folders) == 1 and re.fullmatch(r"run-short-crisp-\d{8}-\d{6}", folders[0].name)
+    assert f"wrote fearguard-out/{folders[0].name}/log.jsonl, summary.json, trajectory.png" in out
+    assert "timeline.png" not in out  # a baseline has no supervisor timeline, and the line does not claim one
+    assert main(["run", "short.toml", "--baseline", "crisp"]) == 0  # the same second: a second folder, not the same one
+    assert len(list((tmp_path / "fearguard-out").iterdir())) == 2
+
+
+def test_a_baseline_run_shows_supervisor_checks_as_not_applicable(tmp_path: Path, capsys) -> None:
+    scenario = tmp_path / "modes.toml"
+    scenario.write_text(SHORT + "[[expect.mode_by]]\nt_s = 0.5\nmode = 'EMERGENCY'\n")
+    assert main(["run", str(scenario), "--baseline", "crisp", "--out", str(tmp_path / "o")]) == 0  # n/a is not a failure
+    out = capsys.readouterr().out
+    assert "  n/a  mode_by EMERGENCY by 0.5 s: n/a: judges the supervisor's mode" in out and "unguarded run" not in out
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    na = "n/a: judges the supervisor's mode, and this controller has none (a baseline)"
+    assert summary["passed"] and {"name": "mode_by EMERGENCY by 0.5 s", "ok": None, "detail": na} in summary["expectations"]
+
+
+def test_replay_wraps_your_steering_function_and_vehicle(shared_data: Path, tmp_path: Path, monkeypatch, capsys) -> None:
+    (tmp_path / "my_pilot_for_replay.py").write_text("def steer(frame):\n    return 2.5\n")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(sys, "path", [str(tmp_path), *sys.path])
+    code = main(["replay", str(shared_data / VIDEO), "--to", "3s", "--every", "2", "--no-plots", "--steer", "my_pilot_for_replay:steer",
+                 "--vehicle", "road_car", "--rules", str(BUNDLED.parent / "rules" / "road_car.toml")])
+    assert code == 0
+    out = capsys.readouterr().out
+    folder = next((tmp_path / "fearguard-out").iterdir())
+    assert folder.name.startswith("replay-solidWhiteRight-") and f"wrote fearguard-out/{folder.name}/log.jsonl" in out
+    records = [json.loads(line) for line in (folder / "log.jsonl").read_text().splitlines()]
+    assert {r["steering_deg"] for r in records} == {2.5}  # the user's function, passed through
+    assert max(r["speed_limit_mps"] for r in records) > 2.0  # a road car is not capped at the 1:10 car's 2 m/s
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (["--steer", "no_such_module_xyz:steer"], "SteerImportError: --steer no_such_module_xyz:steer: cannot import"),
+    (["--vehicle", "no_such_car"], "VehicleFileError: no_such_car: --vehicle: neither a preset"),
+])
+def test_replay_rejects_a_bad_steer_or_vehicle_with_exit_2(tmp_path: Path, capsys, args: list[str], says: str) -> None:
+    assert main(["replay", str(tmp_path / "none.mp4"), "--out", str(tmp_path / "o"), *args]) == 2
+    assert capsys.readouterr().err.startswith(says)
+
+
+def test_a_warning_is_one_line_without_python_source(shared_data: Path, tmp_path: Path, capsys) -> None:
+    log = tmp_path / "sensors.csv"
+    log.write_text("t_s,speed_mps,wheel_temp\n0.0,1.0,40\n")
+    argv = ["replay", str(shared_data / VIDEO), "--to", "2f", "--no-plots", "--sensor-log", str(log), "--out", str(tmp_path / "o")]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert f"warning: {log}: unknown columns ignored: wheel_temp" in err
+    assert "SensorLogWarning" not in err and "warnings.warn" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_suite_prints_totals_and_keeps_supervisor_checks_apart(tmp_path: Path, capsys) -> None:
+    folder = tmp_path / "scenarios"
+    folder.mkdir()
+    (folder / "short.toml").write_text(SHORT + "no_emergency = true\n")
+    assert main(["suite", str(folder), "--seeds", "1", "--out", str(tmp_path / "s")]) == 0
+    out = capsys.readouterr().out
+    assert ("totals: guarded 0 of 1 runs failed an outcome (0 collisions, 0 departures), 0 failed a supervisor check; "
+            "unguarded 0 of 1") in out
+    assert "| short | no_emergency | pass |" in out  # the supervisor-only check: guarded only
+    rows = [json.loads(line) for line in (tmp_path / "s" / "runs.jsonl").read_text().splitlines()]
+    assert {r["controller"]: r["not_applicable"] for r in rows} == {"guarded": [], "unguarded": ["no_emergency"],
+                                                                     "crisp": ["no_emergency"], "aeb": ["no_emergency"]}
