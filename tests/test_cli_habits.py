@@ -116,3 +116,38 @@ def test_suite_prints_totals_and_keeps_supervisor_checks_apart(tmp_path: Path, c
     rows = [json.loads(line) for line in (tmp_path / "s" / "runs.jsonl").read_text().splitlines()]
     assert {r["controller"]: r["not_applicable"] for r in rows} == {"guarded": [], "unguarded": ["no_emergency"],
                                                                      "crisp": ["no_emergency"], "aeb": ["no_emergency"]}
+
+
+def _readme_commands() -> list[str]:
+    """Every `.venv/bin/fearguard ...` line of README's bash blocks (continuations joined, comments cut)."""
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```bash\n(.*?)```", text, flags=re.S)
+    joined = "\n".join(blocks).replace("\\\n", " ")
+    return [line.split("  #")[0].strip() for line in joined.splitlines() if line.startswith(".venv/bin/fearguard ")]
+
+
+def test_every_readme_command_is_one_the_parser_accepts() -> None:
+    import shlex
+
+    from fearguard.cli import build_parser
+
+    commands = _readme_commands()
+    assert len(commands) >= 12
+    for line in commands:
+        argv = shlex.split(line)[1:]
+        try:
+            build_parser().parse_args(argv)
+        except SystemExit as exc:  # argparse's usage error
+            raise AssertionError(f"README command does not parse: {line}") from exc
+
+
+def test_the_progress_line_without_rich_is_one_line_redrawn_on_stderr(monkeypatch, capsys) -> None:
+    import fearguard.cli as cli
+
+    monkeypatch.setitem(sys.modules, "rich.console", None)  # the core install: no rich
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True)
+    with cli._Progress("suite", unit="runs") as bar:
+        bar.update(0, 4)
+        bar.update(4, 4)
+    err = capsys.readouterr().err
+    assert err.startswith("\rsuite: 0/4 runs") and "\rsuite: 4/4 runs" in err and err.endswith("\n") and err.count("\n") == 1

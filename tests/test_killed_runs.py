@@ -39,6 +39,7 @@ def logged_frames(log: Path) -> int:
     return len(numbers)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
 def test_a_killed_closed_loop_run_keeps_a_valid_log_and_a_playable_video(signum: int, tmp_path: Path) -> None:
     scenario = tmp_path / "long.toml"

@@ -174,7 +174,8 @@ class _Progress:
     """A progress bar on stderr (rich's; without rich a plain line redrawn in place); quiet when stderr is no terminal."""
 
     def __init__(self, label: str, unit: str = "frames") -> None:
-        self._label, self._unit, self._start, self._drawn = label, unit, time.perf_counter(), 0.0
+        self._label, self._unit, self._start = label, unit, time.perf_counter()
+        self._drawn: float | None = None  # when the plain line was last drawn
         self._bar: Any = None
         self._live = sys.stderr.isatty()
         try:
@@ -195,7 +196,7 @@ class _Progress:
     def __exit__(self, *exc: object) -> None:
         if self._bar is not None:
             self._bar.__exit__(None, None, None)
-        elif self._live and self._drawn:
+        elif self._live and self._drawn is not None:
             print(file=sys.stderr)
 
     def update(self, done: int, total: int | None) -> None:
@@ -203,7 +204,7 @@ class _Progress:
         rate = f"{done / elapsed:.{0 if self._unit == 'frames' else 2}f} {self._unit}/s" if elapsed > 0 and done else ""
         if self._bar is not None:
             self._bar.update(self._task, completed=done, total=total, rate=rate)
-        elif self._live and (elapsed - self._drawn >= 0.5 or done == total):
+        elif self._live and (self._drawn is None or elapsed - self._drawn >= 0.5 or done == total):
             self._drawn = elapsed
             print(f"\r{self._label}: {done}{f'/{total}' if total else ''} {self._unit} {rate}   ", end="", file=sys.stderr, flush=True)
 

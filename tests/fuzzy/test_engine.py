@@ -21,6 +21,7 @@ def random_cues(n: int, seed: int) -> np.ndarray:
     return x
 
 
+@pytest.mark.slow
 def test_engine_agrees_with_scikit_fuzzy_on_1000_random_vectors(rules: fg.RuleBase) -> None:
     x = random_cues(1000, seed=7)
     ref = np.array([rules.reference_fear(row) for row in x])
@@ -28,6 +29,7 @@ def test_engine_agrees_with_scikit_fuzzy_on_1000_random_vectors(rules: fg.RuleBa
     assert np.abs(ref - eng).max() <= AGREEMENT
 
 
+@pytest.mark.slow
 def test_road_car_rules_agree_with_scikit_fuzzy() -> None:
     rb = fg.load_rules("rules/road_car.toml")
     rng = np.random.default_rng(3)

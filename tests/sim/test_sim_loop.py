@@ -24,6 +24,7 @@ def test_the_library_has_every_scenario_the_issue_asks_for():
                      "ultrasonic_dropout", "camera_blackout", "steering_fault"}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", SCENARIOS, ids=[p.stem for p in SCENARIOS])
 def test_guarded_run_meets_every_expectation(path: Path):
     result = run_scenario(load_scenario(path))
@@ -32,6 +33,7 @@ def test_guarded_run_meets_every_expectation(path: Path):
     assert result.metrics.collisions == 0 and result.metrics.lane_departures == 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["stationary_obstacle", "occluding_traffic_follow_lead", "unmarked_hill"])
 def test_the_unguarded_car_fails_the_hazard(name: str):
     result = run_scenario(load_scenario(Path(SCENARIOS[0]).parent / f"{name}.toml"), controller="unguarded")
@@ -39,6 +41,7 @@ def test_the_unguarded_car_fails_the_hazard(name: str):
     assert result.metrics.collisions + result.metrics.lane_departures >= 1
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", BENIGN)
 def test_benign_scenarios_no_false_alarm_and_at_least_95_percent_of_unguarded_speed(name: str):
     scenario = load_scenario(Path(SCENARIOS[0]).parent / f"{name}.toml")
@@ -47,6 +50,7 @@ def test_benign_scenarios_no_false_alarm_and_at_least_95_percent_of_unguarded_sp
     assert guarded.metrics.mean_speed_mps >= 0.95 * unguarded.metrics.mean_speed_mps
 
 
+@pytest.mark.slow
 def test_same_seed_same_log_byte_for_byte(tmp_path: Path):
     scenario = load_scenario(Path(SCENARIOS[0]).parent / "stationary_obstacle.toml")
     logs = []
@@ -58,6 +62,7 @@ def test_same_seed_same_log_byte_for_byte(tmp_path: Path):
     assert (tmp_path / "other" / "log.jsonl").read_bytes() != logs[0]
 
 
+@pytest.mark.slow
 def test_cli_run_writes_log_summary_plots_and_video(tmp_path: Path, capsys):
     out = tmp_path / "run"
     code = main(["run", str(Path(SCENARIOS[0]).parent / "stationary_obstacle.toml"), "--out", str(out), "--video"])
@@ -81,6 +86,7 @@ def test_cli_run_exit_1_when_an_expectation_fails_and_2_on_a_bad_file(tmp_path: 
     assert str(bad) in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_suite_table_compares_guarded_with_baselines(tmp_path: Path):
     rows = run_suite([Path(SCENARIOS[0]).parent / "stationary_obstacle.toml"], seeds=1).rows
     assert {r["controller"] for r in rows} == {"guarded", "unguarded", "crisp", "aeb"}

@@ -68,6 +68,7 @@ very_high = { trimf = [0.45, 0.6, 0.6] }""")
 HOLD_0 = ("hold_s = 2.0 ", "hold_s = 0.0 ")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "edit", "only", "expected"), [
     ("inverted.toml", INVERTED, "3", "monotone in each cue"),
     ("low_fear.toml", LOW_FEAR, "4", "no EMERGENCY within enter_frames"),
@@ -179,6 +180,7 @@ def test_import_fearguard_does_not_need_hypothesis() -> None:
     assert done.returncode == 2 and "pip install 'fearguard[testing]'" in done.stderr, done.stderr
 
 
+@pytest.mark.slow
 def test_the_three_line_user_test_runs_in_a_fresh_folder(tmp_path) -> None:
     (tmp_path / "rules").mkdir()
     (tmp_path / "rules" / "my_car.toml").write_text((RULES / "default.toml").read_text())

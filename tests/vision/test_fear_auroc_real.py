@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import pytest
+
 BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
 sys.path.insert(0, str(BENCHMARKS))
 import eval_fear_auroc as labelled  # noqa: E402  (the evaluation script is the single home of the method)
@@ -18,6 +20,7 @@ def test_labels_cover_every_kind_of_picture():
     assert {r["exposure"] for r in rows} == {"ok", "dark", "glare"}
 
 
+@pytest.mark.slow
 def test_fear_auroc_on_the_held_out_half(shared_data: Path):
     scored = labelled.score(labelled.load("eval"))
     lost, degraded = labelled.aurocs(scored)

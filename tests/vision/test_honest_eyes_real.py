@@ -62,6 +62,7 @@ def test_clean_stills_are_seen_clearly(warmed, stills):
     assert tracked_clear >= 12
 
 
+@pytest.mark.slow
 def test_occluders_of_any_colour_raise_occlusion_and_fear(warmed, stills):
     """5 colours × 3 placements × 14 stills: occlusion ≥ 0.3 and fear ≥ clean + 0.2 in ≥ 90 % of the cases."""
     failures, cases = [], 0
