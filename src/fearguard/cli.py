@@ -303,6 +303,7 @@ def cmd_suite(args: argparse.Namespace) -> int:
     Each finished run is appended to runs.jsonl at once; ``--resume`` skips the runs already there.
     """
     from fearguard.recorder import write_json
+    from fearguard.sim.loop import CONTROLLERS
     from fearguard.sim.suite import run_suite, scenario_files, suite_markdown, suite_table, suite_totals
 
     files = scenario_files(args.folder)
@@ -310,7 +311,7 @@ def cmd_suite(args: argparse.Namespace) -> int:
         raise FearguardError(f"suite: no *.toml scenarios in {args.folder}; give a folder of scenario files")
     out = Path(args.out) if args.out else _latest_suite() if args.resume else _new_out("suite", f"{args.seeds}seeds")
     out.mkdir(parents=True, exist_ok=True)
-    print(f"suite: {len(files)} scenarios × {args.seeds} seed(s) × guarded and 3 baselines → {out}", file=sys.stderr)
+    print(f"suite: {len(files)} scenarios × {args.seeds} seed(s) × {', '.join(CONTROLLERS)} → {out}", file=sys.stderr)
     with _Progress("suite", unit="runs") as bar:
         progress = run_suite(files, args.seeds, on_run=print if args.verbose else None, runs_log=out / "runs.jsonl",
                              resume=args.resume, stop=args.stop, on_progress=bar.update)

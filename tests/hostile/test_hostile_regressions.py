@@ -91,6 +91,7 @@ def test_a_fear_universe_other_than_0_to_1_is_refused(write_rules) -> None:
     assert main(["rules", "check", str(path)]) == 2
 
 
+@pytest.mark.slow  # a dense-grid proof over a rule-file variant (tens of seconds)
 def test_rules_check_fails_when_the_worst_cues_cannot_reach_emergency(write_rules, capsys) -> None:
     path = write_rules(("emergency_enter_fear = 0.7 ", "emergency_enter_fear = 0.95 "))
     report = check_rules(fg.load_rules(path))
@@ -101,6 +102,7 @@ def test_rules_check_fails_when_the_worst_cues_cannot_reach_emergency(write_rule
     assert "UNREACHABLE: collision reaches only fear 0.917" in out and "emergency_enter_fear 0.95" in out
 
 
+@pytest.mark.slow  # a dense-grid proof over a rule-file variant (tens of seconds)
 def test_rules_check_fails_when_calm_cues_are_not_below_caution(write_rules, capsys) -> None:
     path = write_rules(("caution_fear = 0.375", "caution_fear = 0.05"))
     assert not check_rules(fg.load_rules(path)).ok
