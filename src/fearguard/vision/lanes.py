@@ -340,6 +340,8 @@ def ridge_lines(
 ) -> list[tuple[tuple[float, float], float]]:
     """Each Hough fit refitted on the inner edges of the marking ridges along it, and its support (ridges.py); all
     fits scanned in one pass."""
+    if not fits:
+        return []
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
     centres = np.array([a * rows + b for a, b in fits])
     scan = scan_ridges(maps, rows, centres, lane_width, np.array(right_sides, bool), region.marking_share)
@@ -397,20 +399,16 @@ def detect_lanes(
     sides = split_by_slope(segments, region.width_px)
     lane_width = lane_width_rows(np.arange(region.top_v_px, region.bottom_v_px + 1), priors, region)
     plain = _plainness(maps.paint_integral[-1, -1] / max(1, cv2.countNonZero(mask)), region.clutter)
+    fits = [list(candidate_fits(side, region, prior)) for side, prior in zip(sides, priors, strict=True)]
+    # every candidate of both sides scanned in one pass (the cost is per array operation, hardly per candidate) ...
+    scanned = ridge_lines(maps, region, fits[0] + fits[1], lane_width, [False] * len(fits[0]) + [True] * len(fits[1]))
     found: list[list[LaneLine]] = [[], []]
-    fits = [candidate_fits(side, region, prior) for side, prior in zip(sides, priors, strict=True)]
-    looking = [0, 1]  # the sides whose preferred line is not yet well supported: their next candidates are scanned
-    while looking:
-        batch = [(i, fit) for i in looking if (fit := next(fits[i], None)) is not None]
-        if not batch:
-            break
-        looking = []
-        scanned = ridge_lines(maps, region, [f for _, f in batch], lane_width, [i == 1 for i, _ in batch])
-        for (i, _), ((a, b), support) in zip(batch, scanned, strict=True):
+    for i, results in enumerate((scanned[: len(fits[0])], scanned[len(fits[0]) :])):
+        for (a, b), support in results:
             support *= plain
             if support > 0:
                 found[i].append(LaneLine(a, b, support, len(sides[i])))
-            if not (support >= PREFER_SHARE and len(found[i]) == 1):  # else no later candidate can beat it clearly
-                looking.append(i)
+            if support >= PREFER_SHARE and len(found[i]) == 1:
+                break  # ... and used in preference order: a well-supported preferred line cannot be beaten clearly
     left, right = best_pair(found[0], found[1], region)
     return LaneDetection(region, left, right, features, len(segments), maps)

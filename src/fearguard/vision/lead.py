@@ -51,20 +51,21 @@ def detect_lead(
     """The nearest vehicle-like box in the ego lane of a working image, or None."""
     if not math.isfinite(reference) or reference < 20:
         return None  # too dark to tell an underside from the road
-    h, w = gray.shape
+    w = gray.shape[1]
     top, bottom = region.top_v_px, region.bottom_v_px
     rows = np.arange(top, bottom + 1, dtype=float)
     lu, ru = left.u_at(rows), right.u_at(rows)
     width = ru - lu
     if not (width > 0).all():
         return None
-    lane = np.zeros((h, w), np.uint8)
-    poly = np.concatenate([np.stack([lu - LANE_WIDEN * width, rows], 1), np.stack([ru + LANE_WIDEN * width, rows], 1)[::-1]])
+    # only the road rows (the lane polygon lies in them; the rows above cannot hold an underside), row 0 = top
+    lane = np.zeros((bottom + 1 - top, w), np.uint8)
+    band_rows = rows - top
+    poly = np.concatenate([np.stack([lu - LANE_WIDEN * width, band_rows], 1), np.stack([ru + LANE_WIDEN * width, band_rows], 1)[::-1]])
     cv2.fillPoly(lane, [np.rint(poly).astype(np.int32)], 255)
-    dark = cv2.bitwise_and(cv2.inRange(gray, 0, int(DARK_RATIO * reference)), lane)
-    if cv2.countNonZero(dark) == 0:
+    band = cv2.bitwise_and(cv2.inRange(gray[top : bottom + 1], 0, int(DARK_RATIO * reference)), lane)
+    if cv2.countNonZero(band) == 0:
         return None  # nothing dark in the lane: the common case, and the cheap one
-    band = dark[top : bottom + 1]  # components only where the lane is (the rows above cannot hold an underside)
     _n, _labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8)
     stats = stats[1:].astype(np.int64)
     stats[:, 1] += top

@@ -49,9 +49,9 @@ class Obstacle:
     range_m: float | None  # None without the camera's mounting height
 
 
-def foreign_mask(maps: SurfaceMaps, road: RoadAppearance) -> np.ndarray:
-    """bool over the maps' band: patches that do not look like the road (any colour, any size)."""
-    grey, sat, rough = maps.grey, maps.saturation, maps.roughness
+def foreign_mask(maps: SurfaceMaps, road: RoadAppearance, columns: slice = slice(None)) -> np.ndarray:
+    """bool over the maps' band (those columns): patches that do not look like the road (any colour, any size)."""
+    grey, sat, rough = maps.grey[:, columns], maps.saturation[:, columns], maps.roughness[:, columns]
     ref = max(road.grey, 1.0)
     off = np.abs(grey - ref) >= FOREIGN_DEV_MIN
     lit = grey >= SHADE_SAT_GATE * ref  # HLS saturation of dark pixels is unstable: a shadow is no coloured object
@@ -73,16 +73,17 @@ def detect_obstacle(
     inset = INSET * (b - a)
     lo = np.clip(np.ceil(a + inset), 0, region.width_px).astype(np.int64)
     hi = np.clip(np.floor(b - inset), 0, region.width_px).astype(np.int64)
-    cols = np.arange(region.width_px)[None, :]
+    c0, c1 = int(lo.min()), int(max(hi.max(), lo.min()))  # only the columns some row's interior covers are judged
+    cols = np.arange(c0, c1)[None, :]
     inside = (cols >= lo[:, None]) & (cols < hi[:, None])
-    foreign = foreign_mask(maps, road) & inside
+    foreign = foreign_mask(maps, road, slice(c0, c1)) & inside
     count = foreign.sum(axis=1)
     width = np.maximum(hi - lo, 0)
     hit = (width > 0) & (count >= np.maximum(MIN_PX, MIN_SHARE * width))
     bottom = _lowest_stretch_end(hit, MIN_ROWS)
     if bottom is None:
         return None
-    u = np.flatnonzero(foreign[bottom - MIN_ROWS + 1 : bottom + 1].any(axis=0))
+    u = c0 + np.flatnonzero(foreign[bottom - MIN_ROWS + 1 : bottom + 1].any(axis=0))
     v_frame = (rows[bottom] + 1.0) * scale  # the object stands on the lower edge of its lowest row
     u_left, u_right = u.min() * scale, (u.max() + 1.0) * scale
     range_m = camera.ground_range_m(v_frame)
@@ -92,10 +93,7 @@ def detect_obstacle(
 
 def _lowest_stretch_end(hit: np.ndarray, min_rows: int) -> int | None:
     """Index of the last row of the lowest stretch of ≥ min_rows consecutive True rows, or None."""
-    run = 0
-    best = None
-    for i, h in enumerate(hit):  # top to bottom; a few dozen rows
-        run = run + 1 if h else 0
-        if run >= min_rows and (i + 1 == len(hit) or not hit[i + 1]):
-            best = i
-    return best
+    change = np.diff(np.concatenate([[0], hit.astype(np.int8), [0]]))
+    first, after = np.flatnonzero(change == 1), np.flatnonzero(change == -1)  # each stretch's first row, one past its last
+    long = after[after - first >= min_rows]
+    return int(long[-1]) - 1 if len(long) else None

@@ -48,6 +48,8 @@ MODEL_CHANGE_FRAMES = 10  # [frames] ... and re-learnt after this many frames in
 MODEL_GREY_RATIO = 1.35  # [-] a frame's road this much brighter or darker than the model is unlike it ...
 MODEL_ROUGH_RATIO = 2.0  # [-] ... as is one this much rougher or smoother
 LEARN_OCCLUSION_MAX = 0.15  # [-] frames with more occlusion than this do not teach the model
+_INTERIOR_FRACTIONS = np.linspace(0.2, 0.8, 5)  # [-] of the lane width: where road_appearance samples each row
+_ACROSS_FRACTIONS = np.linspace(-0.9, 1.9, ROW_SAMPLES)  # [-] of the lane width: row_references' points across the road
 
 
 @dataclass(frozen=True)
@@ -123,7 +125,8 @@ def surface_maps(
     g = gray[band].astype(np.float32)
     k = (2 * PATCH_HALF_PX + 1, 3)
     grey = cv2.blur(g, k, borderType=cv2.BORDER_REPLICATE)
-    diff = np.minimum(np.abs(np.diff(g, axis=1, append=g[:, -1:])), DIFF_CLIP_PX)
+    diff = np.zeros_like(g)  # |right neighbour − pixel|, clipped; 0 in the last column (no right neighbour)
+    cv2.min(cv2.absdiff(g[:, 1:], g[:, :-1]), DIFF_CLIP_PX, dst=diff[:, :-1])
     rough = cv2.blur(diff, k, borderType=cv2.BORDER_REPLICATE) / np.maximum(grey, 1.0)
     sat = cv2.blur(hls[band, :, 2].astype(np.float32), k, borderType=cv2.BORDER_REPLICATE)
     if paint_integral is None:
@@ -140,7 +143,7 @@ def road_appearance(
     rows = np.arange(region.top_v_px + 1, region.bottom_v_px, 2 * ROW_STEP)
     a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
     lo, hi = np.minimum(a, b), np.maximum(a, b)
-    frac = np.linspace(0.2, 0.8, 5)
+    frac = _INTERIOR_FRACTIONS
     cols = clamp(np.rint(lo[:, None] + frac[None, :] * (hi - lo)[:, None]).astype(np.int64), 0, region.width_px - 1)
     r = (rows - maps.top_v_px)[:, None]
     grey, sat, rough = np.median(np.stack([maps.grey[r, cols], maps.saturation[r, cols], maps.roughness[r, cols]]).reshape(3, -1), axis=1)
@@ -151,15 +154,16 @@ def road_reference(gray: np.ndarray, region: RoadRegion, left: LaneLine, right: 
     """Median grey of the lane interior in the bottom rows of the region (the road just ahead)."""
     bottom = region.bottom_v_px
     top = max(region.top_v_px, int(bottom - REFERENCE_ROWS * (bottom - region.top_v_px)))
-    values = []
-    for v in range(top, bottom + 1, ROW_STEP):
-        a, b = left.u_at(v), right.u_at(v)
-        lo, hi = int(max(0, min(a, b) + 0.15 * abs(b - a))), int(min(region.width_px, max(a, b) - 0.15 * abs(b - a)))
-        if hi > lo:
-            values.append(gray[v, lo:hi])
-    if not values:
+    rows = np.arange(top, bottom + 1, ROW_STEP)
+    a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
+    inset = 0.15 * np.abs(b - a)
+    lo = np.maximum(0, np.minimum(a, b) + inset).astype(np.int64)
+    hi = np.minimum(region.width_px, np.maximum(a, b) - inset).astype(np.int64)
+    cols = np.arange(gray.shape[1])
+    inside = (cols >= lo[:, None]) & (cols < hi[:, None])  # [lo, hi) of each row
+    if not inside.any():
         return float(np.median(gray[top : bottom + 1]))
-    return float(np.median(np.concatenate(values)))
+    return float(np.median(gray[rows][inside]))
 
 
 def row_references(
@@ -169,7 +173,7 @@ def row_references(
     and whether the row is uniform (ROW_UNIFORM of its points close to that median: one surface across the road,
     not a vehicle or a box covering part of it)."""
     a, b = interior[0].u_at(rows.astype(float)), interior[1].u_at(rows.astype(float))
-    frac = np.linspace(-0.9, 1.9, ROW_SAMPLES)
+    frac = _ACROSS_FRACTIONS
     cols = np.rint(a[:, None] + frac[None, :] * (b - a)[:, None])
     inside = (cols >= 0) & (cols < region.width_px)
     values = gray[rows[:, None], clamp(cols, 0, region.width_px - 1).astype(np.int64)].astype(float)
