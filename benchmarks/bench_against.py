@@ -7,6 +7,8 @@ new, old, ...) in subprocesses with ``PYTHONPATH`` set to each tree's ``src``:
 
 - perception: ``FearGuard(HoughLaneSteering())`` on the real road stills at 640×480 (QR localisation on,
   as ``bench_perception.py``): the median time of one ``step``;
+- reference: a bare grey + Canny + probabilistic Hough pass (``cv2.HoughLinesP``) over the same whole 640×480
+  frames, timed the same way in the same process: the perception step should cost no more than this classic pass;
 - closed loop: bundled scenarios rendered at 320×240 → ``FearGuard.step`` → the car (as
   ``bench_closed_loop.py``): frames per second.
 
@@ -27,9 +29,11 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parents[1]
 STILLS = HERE.parent / "shared" / "data" / "road" / "images"
+PERCEPTION = "perception step ms (median, 640x480)"
+BARE = "bare Canny+HoughP ms (median, 640x480)"
 
-WORKLOAD = r'''
-import json, statistics, sys, time
+WORKLOAD = f"BARE = {BARE!r}\n" + r'''
+import json, math, statistics, sys, time
 from pathlib import Path
 import cv2
 import fearguard as fg
@@ -45,6 +49,13 @@ for i in range(120):
     guard.step(obs)
     steps.append(clock() - t0)
 out["perception step ms (median, 640x480)"] = 1e3 * statistics.median(steps[20:])
+bare = []
+for i in range(120):  # the reference: a bare grey + Canny + probabilistic Hough pass over the whole frame
+    t0 = clock()
+    edges = cv2.Canny(cv2.cvtColor(frames[i % len(frames)], cv2.COLOR_BGR2GRAY), 50, 150)
+    cv2.HoughLinesP(edges, 1, math.pi / 180, 20, minLineLength=20, maxLineGap=10)
+    bare.append(clock() - t0)
+out[BARE] = 1e3 * statistics.median(bare[20:])
 from fearguard.sim.scenario import load_scenario
 from fearguard.sim.suite import BUNDLED
 from fearguard.sim.world import World
@@ -86,8 +97,12 @@ def main() -> None:
     for key in rounds["old"][0]:
         old = statistics.median(r[key] for r in rounds["old"])
         new = statistics.median(r[key] for r in rounds["new"])
-        ratio = old / new if key.startswith("perception") else new / old
+        ratio = old / new if key in (PERCEPTION, BARE) else new / old
         print(f"{key:50s} {old:8.2f} {new:8.2f}  {ratio:.3f}")
+    for label, runs in rounds.items():
+        if BARE in runs[0]:
+            per = statistics.median(r[PERCEPTION] / r[BARE] for r in runs)
+            print(f"{label}: perception step / bare Canny+HoughP {per:.3f} (goal ≤ 1, same process, same frames)")
 
 
 if __name__ == "__main__":
