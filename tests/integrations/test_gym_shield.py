@@ -193,6 +193,26 @@ def test_a_car_beside_is_not_ahead_and_blocks_a_lane_change_toward_it():
     assert abs(info["fearguard_action"][1]) < abs(toward / math.radians(45.0))  # steered to keep the lane instead
 
 
+def test_a_cut_in_close_behind_a_faster_car_is_rss_safe_but_refused_when_the_rules_would_stop_for_it():
+    env = make()
+    env.reset(seed=0)
+    base = env.unwrapped
+    ego, road = base.vehicle, base.road
+    side = road.network.side_lanes(ego.lane_index)[0]
+    lane = road.network.get_lane(side)
+    s_ego = lane.local_coordinates(ego.position)[0]
+    others = [o for o in road.vehicles if o is not ego]
+    for k, o in enumerate(others):  # everyone else far ahead in the ego's lane: only the car placed below matters
+        o.position = road.network.get_lane(ego.lane_index).position(s_ego + 400.0 + 20.0 * k, 0.0)
+    near = others[0]
+    near.position, near.heading, near.speed = lane.position(s_ego + ego.LENGTH + 7.0, 0.0), lane.heading_at(s_ego), ego.speed + 3.0
+    toward = 0.3 if side[2] > ego.lane_index[2] else -0.3  # rad, + = right
+    vehicle = highway_vehicle(env)
+    assert lane_change_refusal(env, vehicle, toward) == ""  # 7 m behind a faster car: inside RSS
+    why = lane_change_refusal(env, vehicle, toward, env.guard.rules)
+    assert "feared" in why and "7.0 m" in why  # the road-car rules fear 7 m at EMERGENCY: the guard would stop for it
+
+
 def test_a_non_highway_env_needs_observe_and_act():
     env = gymnasium.make("Pendulum-v1")
     with pytest.raises(TypeError, match="observe"):

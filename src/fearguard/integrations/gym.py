@@ -18,8 +18,9 @@ brightness mid-band, no occlusion, no QR localisation). The vehicle's numbers ar
   ``a ≤ (limit − v) · policy_frequency`` (the env holds an action for one policy period), never below
   the env's hardest braking.
 - **Steering policy:** the agent's steering passes unchanged unless it starts a lane change into a lane
-  with a vehicle beside the ego, or whose vehicle ahead is inside a safe distance the ego cannot reach
-  within one policy period at its hardest braking: then the shield sends highway-env's own lane-following
+  with a vehicle beside the ego, whose vehicle ahead is inside a safe distance the ego cannot reach
+  within one policy period at its hardest braking, or so near that the guard's rules fear it at
+  EMERGENCY level: then the shield sends highway-env's own lane-following
   steering toward the current lane and says why in ``info["fearguard_lane_change"]``. fearguard's road
   steering strategies (follow the lead's bearing, hold the last trusted angle) do not apply: a
   simulator's road picture never fails.
@@ -198,12 +199,16 @@ def binding_lead(leads: list[LaneLead], vehicle: VehicleLimits) -> LaneLead | No
     return min(leads, key=lambda lead: (envelope_speed_mps(lead.range_m, vehicle, lead.speed_mps), lead.range_m), default=None)
 
 
+def sim_cues(range_m: float) -> Cues:
+    """A simulator's cues: a perfect road picture, the range given, no QR localisation to go stale."""
+    return Cues(lane_confidence=1.0, brightness=SIM_BRIGHTNESS, occlusion=0.0, obstacle_range_m=range_m, qr_staleness_s=0.0)
+
+
 def highway_observation(env: Any, vehicle: VehicleLimits | None = None, steering_rad: float | None = None) -> Observation:
     """The shield's Observation of a highway-env state (cue level): the binding lead's range and range rate."""
     base = env.unwrapped
     lead = binding_lead(highway_leads(env, steering_rad), vehicle if vehicle is not None else highway_vehicle(env))
-    range_m = lead.range_m if lead is not None else math.inf
-    cues = Cues(lane_confidence=1.0, brightness=SIM_BRIGHTNESS, occlusion=0.0, obstacle_range_m=range_m, qr_staleness_s=0.0)
+    cues = sim_cues(lead.range_m if lead is not None else math.inf)
     return Observation(
         t_s=float(base.time),
         speed_mps=max(0.0, float(base.vehicle.speed)),  # highway-env never reverses here; −1e-15 is rounding
@@ -212,11 +217,13 @@ def highway_observation(env: Any, vehicle: VehicleLimits | None = None, steering
     )
 
 
-def lane_change_refusal(env: Any, vehicle: VehicleLimits, steering_rad: float) -> str:
+def lane_change_refusal(env: Any, vehicle: VehicleLimits, steering_rad: float, rules: RuleBase | None = None) -> str:
     """Why the lane change this steering starts is unsafe ("" when it is not one, or it is safe).
 
-    Unsafe: a vehicle beside the ego in the lane being entered, or its vehicle ahead inside a safe distance the
-    ego cannot reach within one policy period at its hardest braking (RSS: a cut-in must leave the distance).
+    Unsafe: a vehicle beside the ego in the lane being entered; its vehicle ahead inside a safe distance the ego
+    cannot reach within one policy period at its hardest braking (RSS: a cut-in must leave the distance); or,
+    with ``rules``, so near that the guard's own fear of that range would reach EMERGENCY (it would then stop
+    on the highway for a car it chose to cut in behind, even one pulling away).
     """
     base = env.unwrapped
     road, ego = base.road, base.vehicle
@@ -232,6 +239,10 @@ def lane_change_refusal(env: Any, vehicle: VehicleLimits, steering_rad: float) -
         if safe < reachable:
             return (f"lane change into lane {lane[2]} refused: its vehicle ahead at {lead.range_m:.1f} m "
                     f"({lead.speed_mps:.1f} m/s) allows {safe:.1f} m/s, braking reaches {max(reachable, 0.0):.1f} m/s")
+        fear = rules.evaluate(sim_cues(lead.range_m)).fear if rules is not None else 0.0
+        if rules is not None and fear >= rules.policy.emergency_enter_fear:
+            return (f"lane change into lane {lane[2]} refused: its vehicle ahead at {lead.range_m:.1f} m is feared "
+                    f"{fear:.2f} >= {rules.policy.emergency_enter_fear:.2f} (EMERGENCY)")
     return ""
 
 
@@ -319,7 +330,7 @@ class FearGuardShield(gymnasium.Wrapper):
         act = np.array(action, dtype=float).reshape(-1).copy()
         s = float(np.clip(act[1], -1.0, 1.0)) if act.size > 1 and math.isfinite(act[1]) else 0.0
         self._steering_rad = low + (s + 1.0) * (high - low) / 2.0
-        refusal = lane_change_refusal(self.env, self.guard.vehicle, self._steering_rad)
+        refusal = lane_change_refusal(self.env, self.guard.vehicle, self._steering_rad, self.guard.rules)
         if not refusal or act.size < 2:
             return action, ""
         self._steering_rad = float(np.clip(lane_keeping_steering_rad(self.env), low, high))
