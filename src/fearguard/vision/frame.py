@@ -189,8 +189,9 @@ def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
     work = bgr if (ww, wh) == (fw, fh) else cv2.resize(bgr, (ww, wh), interpolation=cv2.INTER_AREA)
     region, mask = _region_and_mask(ww, wh, camera)
     gray, hls = _band_conversions(work, region)
+    band = slice(region.top_v_px, region.bottom_v_px + 1)  # the mask is empty outside the road rows
     return Prepared(bgr=bgr, camera=cam, scale=fw / ww, region=region, mask=mask, gray=gray, hls=hls,
-                    exposure=road_exposure(gray, mask))
+                    exposure=road_exposure(gray[band], mask[band]))
 
 
 def find_lanes(p: Prepared, trackers: Trackers, t_s: float) -> Lanes:
