@@ -252,10 +252,11 @@ class FearGuard:
             caps.append(cfg.lane_check_fraction * v.max_speed_mps)
             reasons.append(check.why)
         elif check is None and st.estimator_distrusted:  # the check cannot run now: do not go back to a faulty estimator
-            wanted, mode = st.trusted_steering_deg, Mode.CAUTION if mode is Mode.NORMAL else mode
+            seen_now = _lane_steering(perceived)  # a stale angle held for seconds drives out of a bending lane
+            wanted, mode = seen_now if seen_now is not None else st.trusted_steering_deg, Mode.CAUTION if mode is Mode.NORMAL else mode
             caps.append(cfg.lane_check_fraction * v.max_speed_mps)
-            reasons.append(f"lane check: the estimator steered out of the lane when last checked: holding the lane "
-                           f"geometry's {wanted:+.1f} deg")
+            source = "steering by the lane geometry seen now" if seen_now is not None else "holding the lane geometry's last"
+            reasons.append(f"lane check: the estimator steered out of the lane when last checked: {source} {wanted:+.1f} deg")
         if st.mode.mode is Mode.EMERGENCY:
             active = active_causes(result.cause_fears, st.mode, cfg)
             eligible, seen = recovery_eligible(st.mode, active, range_m, lead, imminent), self._lane_seen(cues, perceived)
@@ -265,8 +266,8 @@ class FearGuard:
             caps.append(plan.cap_mps)
             wanted = plan.steering_deg if plan.steering_deg is not None else wanted
             reasons.append(f"EMERGENCY {strategy.name}: {plan.why}")
-            lane_steer = perceived.analysis.steering_deg if perceived is not None and perceived.analysis is not None else None
-            if creep and lane_steer is not None and math.isfinite(lane_steer):  # creep closed-loop on what is seen of the lane
+            lane_steer = _lane_steering(perceived)
+            if creep and lane_steer is not None:  # creep closed-loop on what is seen of the lane
                 wanted = lane_steer
                 reasons.append(f"creep steering by the lane geometry seen now: {lane_steer:+.1f} deg")
             status = "" if creep else recovery_status(st.recovery, eligible, cfg, t, seen)
@@ -393,3 +394,8 @@ class FearGuard:
             cues=cues, reasons=reasons, fear_limit_mps=0.0, envelope_mps=0.0, perceived=perceived,
         )
 
+
+def _lane_steering(perceived: Perceived | None) -> float | None:
+    """The lane geometry's steering of this frame (the frame pipeline's own estimate), None when it has none."""
+    lane = perceived.analysis.steering_deg if perceived is not None and perceived.analysis is not None else None
+    return lane if lane is not None and math.isfinite(lane) else None

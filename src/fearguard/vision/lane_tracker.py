@@ -2,9 +2,11 @@
 
 Each boundary is tracked as its image column at the road region's top and bottom rows, with a
 constant-velocity model (state: u_top, u_bottom and their rates, px and px/s). A detection far from
-the prediction (Mahalanobis gate) is treated as a miss, unless it persists ``REINIT_AFTER`` frames,
-which re-initialises the track there (the lane really moved, e.g. a lane change). A track without
-detections is predicted for ``LOST_AFTER_S`` and then dropped.
+the prediction (Mahalanobis gate) is treated as a miss, unless it persists — ``REINIT_AFTER`` outliers
+in a row, each within ``REINIT_AGREE`` of the one before — which re-initialises the track there (the lane
+really moved, e.g. a lane change). Outliers scattered over the image (a shadow edge one frame, a far dash
+the next) are noise and never move a track. A track without detections is predicted for
+``LOST_AFTER_S`` and then dropped.
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ MEASUREMENT_STD = 0.012  # [-] of the width: pixel noise of a detected boundary'
 VELOCITY_STD = 0.15  # [-] of the width per s: a new track's rate is unknown but small (a first jump is noise, not motion)
 ACCEL_STD = 0.6  # [-] of the width per s²: how fast a boundary may move in the image (curves, steering)
 GATE_CHI2 = 13.8  # [-] chi-square, 2 dof, p = 0.001: detections beyond this are outliers
-REINIT_AFTER = 3  # [frames] consecutive outliers that re-initialise the track
+REINIT_AFTER = 3  # [frames] consecutive outliers that re-initialise the track ...
+REINIT_AGREE = 0.04  # [-] of the width: ... each end point this close to the previous outlier's (they persist)
 LOST_AFTER_S = 1.0  # [s] a track without any detection for this long is dropped
 DEFAULT_DT_S = 0.05  # [s] used on the first frame and when time does not advance
 
@@ -38,6 +41,7 @@ class BoundaryTrack:
         self.kf: KalmanFilter | None = None
         self.last_seen_s = -math.inf
         self.outliers = 0
+        self.pending: np.ndarray | None = None  # the last outlier, which the next must agree with to count
 
     def _new_filter(self, z: np.ndarray) -> KalmanFilter:
         kf = kalman_filter(dim_x=4, dim_z=2)
@@ -66,12 +70,13 @@ class BoundaryTrack:
                 self.kf = None
             return False
         if self.kf is None:
-            self.kf, self.last_seen_s, self.outliers = self._new_filter(z), t_s, 0
+            self.kf, self.last_seen_s, self.outliers, self.pending = self._new_filter(z), t_s, 0, None
             return True
         y = z - self.kf.H @ self.kf.x
         s = self.kf.H @ self.kf.P @ self.kf.H.T + self.kf.R
         if float(y @ np.linalg.solve(s, y)) > GATE_CHI2:
-            self.outliers += 1
+            persists = self.pending is not None and float(np.max(np.abs(z - self.pending))) <= REINIT_AGREE * self.width_px
+            self.outliers, self.pending = (self.outliers + 1 if persists else 1), z
             if self.outliers < REINIT_AFTER:
                 if t_s - self.last_seen_s > LOST_AFTER_S:
                     self.kf = None
@@ -79,7 +84,7 @@ class BoundaryTrack:
             self.kf = self._new_filter(z)
         else:
             self.kf.update(z)
-        self.last_seen_s, self.outliers = t_s, 0
+        self.last_seen_s, self.outliers, self.pending = t_s, 0, None
         return True
 
     def line(self, region: RoadRegion) -> LaneLine | None:
