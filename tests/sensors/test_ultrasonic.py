@@ -415,8 +415,8 @@ def test_a_single_closer_spike_waits_and_two_agreeing_readings_are_accepted(
     track: float, frames: int, jump: float, wobble: float, dt: float
 ) -> None:
     spike_m = track - jump
-    assume(spike_m >= 0.2)
     f = UltrasonicFilter()
+    assume(spike_m >= 0.2 and spike_m + wobble >= f.min_range_m)  # the confirming reading is a valid one (0.125 m is not)
     for k in range(frames):
         f.update(k * dt, track)
     gate_m = copy.deepcopy(f).update(frames * dt, None).gate_m  # the gate the spike will meet
