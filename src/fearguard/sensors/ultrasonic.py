@@ -18,15 +18,11 @@ import math
 from collections import deque
 from dataclasses import dataclass
 from enum import Enum
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fearguard import readings
 from fearguard.kalman import kalman_filter, white_noise_q
-
-if TYPE_CHECKING:
-    from filterpy.kalman import KalmanFilter
 
 HALF_SPEED_OF_SOUND_MPS = 171.5  # [m/s] 343 m/s at 20 °C, halved: the echo travels there and back (17150 cm/s)
 HC_SR04_MIN_RANGE_M = 0.15  # [m] 6 in (0.1524 m), lower end of the usable range reported for the HC-SR04
@@ -178,8 +174,14 @@ class UltrasonicFilter:
         self.reset()
 
     def reset(self) -> None:
-        """Forget everything (track, readings, clock): the next call starts as at power-up."""
-        self._filter: KalmanFilter | None = None  # made on first use (``_kf``)
+        """Forget everything (track, readings, clock): the next call starts as at power-up.
+
+        The filter (and with it filterpy and scipy.stats, ~1 s on a Pi) is made here, when the FearGuard is
+        built, on purpose: made on first use, that import stalled the first frame of a 20 Hz Donkey loop
+        past the watchdog (EMERGENCY on 20 % of the easy drive)."""
+        self._kf = kalman_filter(dim_x=2, dim_z=1)
+        self._kf.H = np.array([[1.0, 0.0]])
+        self._kf.R = np.array([[self.measurement_std_m**2]])
         self._track = _Track.NONE
         self._last_t_s: float | None = None  # last call with a valid time
         self._kf_t_s = math.nan  # time of the Kalman state
@@ -187,16 +189,6 @@ class UltrasonicFilter:
         self._accepted_m = math.nan  # value of the last accepted reading
         # the last readings as (t_s, value_m, on_track): NaN = impossible; on_track = consistent with the track then
         self._recent: deque[tuple[float, float, bool]] = deque(maxlen=CONFIRM_WINDOW)
-
-    @property
-    def _kf(self) -> KalmanFilter:
-        """The range track's Kalman filter, made on first use: a car that never sends a range never imports filterpy
-        (and scipy.stats with it, ~0.7 s) when its FearGuard is built."""
-        if self._filter is None:
-            self._filter = kalman_filter(dim_x=2, dim_z=1)
-            self._filter.H = np.array([[1.0, 0.0]])
-            self._filter.R = np.array([[self.measurement_std_m**2]])
-        return self._filter
 
     # -- the frame ----------------------------------------------------------------------------
     def update(self, t_s: float, range_m: float | None = None, echo_s: float | None = None) -> RangeEstimate:
