@@ -6,6 +6,7 @@ import math
 import sys
 from collections import Counter
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -173,15 +174,19 @@ def test_the_vehicle_is_the_envs_car_and_the_lead_speed_comes_from_the_simulator
     assert obs.cues.obstacle_range_m <= 150.0 and lead.range_m <= obs.cues.obstacle_range_m
 
 
-def test_a_car_beside_is_not_ahead_and_blocks_a_lane_change_toward_it():
+def _env_and_side_lane() -> tuple[Any, Any, Any, Any, Any, float]:
+    """A fresh env (seed 0), its ego and road, the first lane beside the ego's, and the ego's s on that lane."""
     env = make()
     env.reset(seed=0)
-    base = env.unwrapped
-    ego, road = base.vehicle, base.road
+    ego, road = env.unwrapped.vehicle, env.unwrapped.road
     side = road.network.side_lanes(ego.lane_index)[0]
-    other = next(o for o in road.vehicles if o is not ego)
     lane = road.network.get_lane(side)
-    s_ego = lane.local_coordinates(ego.position)[0]
+    return env, ego, road, side, lane, lane.local_coordinates(ego.position)[0]
+
+
+def test_a_car_beside_is_not_ahead_and_blocks_a_lane_change_toward_it():
+    env, ego, road, side, lane, s_ego = _env_and_side_lane()
+    other = next(o for o in road.vehicles if o is not ego)
     other.position = lane.position(s_ego + 2.0, 0.0)  # beside the ego, its centre 2 m ahead (overlapping)
     other.heading, other.lane_index = lane.heading_at(s_ego), side
     lead = lane_lead(road, ego, side)
@@ -194,13 +199,7 @@ def test_a_car_beside_is_not_ahead_and_blocks_a_lane_change_toward_it():
 
 
 def test_a_cut_in_close_behind_a_faster_car_is_rss_safe_but_refused_when_the_rules_would_stop_for_it():
-    env = make()
-    env.reset(seed=0)
-    base = env.unwrapped
-    ego, road = base.vehicle, base.road
-    side = road.network.side_lanes(ego.lane_index)[0]
-    lane = road.network.get_lane(side)
-    s_ego = lane.local_coordinates(ego.position)[0]
+    env, ego, road, side, lane, s_ego = _env_and_side_lane()
     others = [o for o in road.vehicles if o is not ego]
     for k, o in enumerate(others):  # everyone else far ahead in the ego's lane: only the car placed below matters
         o.position = road.network.get_lane(ego.lane_index).position(s_ego + 400.0 + 20.0 * k, 0.0)
