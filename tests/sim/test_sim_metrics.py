@@ -100,6 +100,21 @@ def test_expectations_pass_and_fail_on_the_hand_made_run() -> None:
     assert len(got) == len(expect.names()) + 4  # one result per list entry
 
 
+def test_mode_by_counts_a_more_cautious_mode_but_strategy_by_only_itself() -> None:
+    m = Metrics()
+    for k in range(10):  # straight to EMERGENCY (a fault on the first frame), CAUTION only later
+        m.add(truth(k, 0.0), "EMERGENCY" if k < 6 else "CAUTION", "STOP" if k < 6 else "PASS_THROUGH", None, None)
+    expect = Expectations(mode_by=(ModeBy(0.2, "CAUTION"), ModeBy(0.2, "NORMAL")), strategy_by=(StrategyBy(0.2, "CRAWL"),))
+    got = results(expect, m)
+    assert got["mode_by CAUTION by 0.2 s"] == (True, "first EMERGENCY at 0.00 s")
+    assert got["mode_by NORMAL by 0.2 s"] == (True, "first EMERGENCY at 0.00 s")
+    assert got["strategy_by CRAWL by 0.2 s"] == (False, "never CRAWL")
+    cautious_only = Metrics()
+    for k in range(10):
+        cautious_only.add(truth(k, 0.0), "CAUTION", "PASS_THROUGH", None, None)
+    assert results(Expectations(mode_by=(ModeBy(5.0, "EMERGENCY"),)), cautious_only)["mode_by EMERGENCY by 5 s"] == (False, "never EMERGENCY")
+
+
 def test_a_clean_run_meets_its_expectations() -> None:
     m = Metrics()
     for k in range(10):

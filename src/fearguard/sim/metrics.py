@@ -260,8 +260,18 @@ def _stopped_before_obstacle(want: bool, run: RunMetrics, rows: Sequence[Row]) -
                               detail + (f"; {run.collisions} collision(s)" if run.collisions else ""))]
 
 
+MODE_ORDER = ("NORMAL", "CAUTION", "EMERGENCY")  # from least to most cautious
+
+
+def _at_least(field: str, seen: str | None, wanted: str) -> bool:
+    """A mode counts from the wanted one up (EMERGENCY is at least as cautious as CAUTION); a strategy only as itself."""
+    if field == "mode" and seen in MODE_ORDER and wanted in MODE_ORDER:
+        return MODE_ORDER.index(seen) >= MODE_ORDER.index(wanted)
+    return seen == wanted
+
+
 def _reached_by(field: str) -> Check:
-    """"Reach this mode / strategy by t_s": one result per entry."""
+    """"Reach this mode (or a more cautious one) / this strategy by t_s": one result per entry."""
 
     def check(wants: Sequence[Any], run: RunMetrics, rows: Sequence[Row]) -> list[ExpectationResult]:
         out = []
@@ -271,8 +281,10 @@ def _reached_by(field: str) -> Check:
             if not _guarded(rows):
                 out.append(ExpectationResult(name, None, NOT_APPLICABLE))
                 continue
-            first = next((r.t_s for r in rows if getattr(r, field) == value), None)
-            detail = f"first {value} at {first:.2f} s" if first is not None else f"never {value}"
+            first_row = next((r for r in rows if _at_least(field, getattr(r, field), value)), None)
+            first = first_row.t_s if first_row is not None else None
+            seen = getattr(first_row, field) if first_row is not None else value
+            detail = f"first {seen} at {first:.2f} s" if first is not None else f"never {value}"
             out.append(ExpectationResult(name, first is not None and first <= want.t_s + TIME_TOLERANCE_S, detail))
         return out
 

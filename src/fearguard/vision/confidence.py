@@ -5,9 +5,11 @@
 A side not found contributes 0 support, so one boundary alone gives at most 0.5. ``geometry`` is 1 when the
 lane width at the region's middle row and the vanishing point are plausible for a forward camera, falling linearly
 to 0 outside; ``agreement`` (1 without history) compares the detection with the tracked estimate.
-``visibility`` = (1 − occlusion / OCCLUDED_BLIND) × (1 − clipped share / CLIPPED_BLIND): a boundary found on the visible
-part of the road says nothing about the hidden part, and clipped (saturated or black) pixels carry no
-information at all — so washed-out, dark and hidden markings all lower the confidence.
+``visibility`` = (1 − occlusion / OCCLUDED_BLIND) × (1 − clipped share / CLIPPED_BLIND) × (1 − NOISE_WEIGHT · (1 − min(1, S/N / SNR_ACCEPTABLE))): a
+boundary found on the visible part of the road says nothing about the hidden part, clipped (saturated or black)
+pixels carry no information at all, and a picture whose noise is a large share of its signal (night: dark and
+noisy) supports what it shows less — so washed-out, dark, noisy and hidden markings all lower the confidence,
+while dim light with a clean picture (deep shade by day) does not.
 """
 
 from __future__ import annotations
@@ -18,6 +20,9 @@ from fearguard.vision.lanes import LaneLine, RoadRegion, geometry_plausibility, 
 
 CLIPPED_BLIND = 0.5  # [-] share of clipped road pixels at which the picture counts as blind
 OCCLUDED_BLIND = 0.8  # [-] occlusion at which the visible rest of the markings no longer vouches for the lane
+SNR_ACCEPTABLE = 10.0  # [-] road S/N (mean grey / noise σ) from which the picture counts as fully usable (ISO 12232: "acceptable")
+NOISE_WEIGHT = 0.5  # [-] share of the confidence a picture of pure noise loses by its noise alone (noise blurs what it shows; darkness,
+#                     clipping and garbage hide it, and are counted by the other factors)
 AGREEMENT_SCALE = 0.35  # [-] of the lane width: mean disagreement with the track at which agreement reaches 0
 
 
@@ -44,7 +49,7 @@ def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadR
 
 def lane_confidence(
     left: LaneLine | None, right: LaneLine | None, region: RoadRegion, agreement_left: float = 1.0, agreement_right: float = 1.0,
-    occlusion: float = 0.0, clipped_share: float = 0.0,
+    occlusion: float = 0.0, clipped_share: float = 0.0, signal_to_noise: float = float("inf"),
 ) -> LaneEvidence:
     """Confidence 0..1 in the ego lane's boundaries, with its factors."""
     s_l = left.support if left is not None else 0.0
@@ -52,6 +57,7 @@ def lane_confidence(
     geometry = geometry_plausibility(left, right, region) if left is not None and right is not None else 1.0
     agree = min(agreement_left if left is not None else 1.0, agreement_right if right is not None else 1.0)
     visibility = _unit(1.0 - occlusion / OCCLUDED_BLIND) * _unit(1.0 - clipped_share / CLIPPED_BLIND)
+    visibility *= 1.0 - NOISE_WEIGHT * (1.0 - _unit(signal_to_noise / SNR_ACCEPTABLE))
     conf = 0.5 * (s_l + s_r) * geometry * agree * visibility
     return LaneEvidence(_unit(conf), s_l, s_r, geometry, agree, visibility)
 

@@ -1,7 +1,14 @@
-"""Exposure of the road region: mean luminance (the brightness cue) and the clipped pixel shares.
+"""Exposure of the road region: mean luminance (the brightness cue), the clipped pixel shares and the noise.
 
 The review behind fearguard names the mean pixel value as the quick check of exposure; the shares of
 saturated and black pixels say *why* a brightness is risky (glare washes markings out, night hides them).
+The noise level tells dim light with a clean picture (deep shade by day) from a dark, noisy one (night):
+
+    noise_grey = sqrt(π/2) · mean |I ∗ N| / 6,   N = [[1, −2, 1], [−2, 4, −2], [1, −2, 1]]
+
+(Immerkær 1996, "Fast noise variance estimation": N is the difference of two Laplacians, blind to
+linear brightness gradients; texture counts as noise, so the estimate errs on the noisy side.)
+Written by hand: one OpenCV filter and a masked mean; no library ships this estimator for a masked region.
 """
 
 from __future__ import annotations
@@ -13,6 +20,7 @@ import numpy as np
 
 SATURATED_MIN = 250  # [grey level] at or above: clipped white
 BLACK_MAX = 10  # [grey level] at or below: crushed black
+_NOISE_KERNEL = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
 
 
 @dataclass(frozen=True)
@@ -22,6 +30,14 @@ class Exposure:
     brightness: float
     saturated_share: float
     black_share: float
+    noise_grey: float = float("nan")  # [grey levels] standard deviation of the sensor noise (NaN: unknown)
+
+    @property
+    def signal_to_noise(self) -> float:
+        """Mean luminance over noise (ISO 12232's S/N: 10 is an "acceptable", 40 an "excellent" picture); inf if noiseless."""
+        if not self.noise_grey > 0.0:
+            return float("inf") if self.noise_grey == 0.0 else float("nan")
+        return self.brightness / self.noise_grey
 
 
 def road_exposure(gray: np.ndarray, mask: np.ndarray) -> Exposure:
@@ -32,4 +48,12 @@ def road_exposure(gray: np.ndarray, mask: np.ndarray) -> Exposure:
     brightness = cv2.mean(gray, mask)[0]
     saturated = cv2.countNonZero(cv2.bitwise_and(cv2.inRange(gray, SATURATED_MIN, 255), mask)) / n
     black = cv2.countNonZero(cv2.bitwise_and(cv2.inRange(gray, 0, BLACK_MAX), mask)) / n
-    return Exposure(float(brightness), float(saturated), float(black))
+    return Exposure(float(brightness), float(saturated), float(black), noise_grey(gray, mask))
+
+
+def noise_grey(gray: np.ndarray, mask: np.ndarray) -> float:
+    """Immerkær's noise estimate (grey levels) over the mask's pixels; NaN if the image is too small for the 3×3 kernel."""
+    if min(gray.shape[:2]) < 3:
+        return float("nan")
+    response = np.abs(cv2.filter2D(gray, cv2.CV_32F, _NOISE_KERNEL, borderType=cv2.BORDER_REPLICATE))
+    return float(np.sqrt(np.pi / 2.0) * cv2.mean(response, mask)[0] / 6.0)

@@ -243,7 +243,7 @@ def judge_confidence(p: Prepared, lanes: Lanes, occlusion_share: float) -> LaneE
     """lane_confidence of this frame from the accepted detections, their agreement, occlusion and clipped pixels."""
     clipped = p.exposure.saturated_share + p.exposure.black_share
     return lane_confidence(lanes.seen_left, lanes.seen_right, p.region, lanes.agreement_left, lanes.agreement_right,
-                           occlusion_share, clipped)
+                           occlusion_share, clipped, p.exposure.signal_to_noise)
 
 
 def read_qr(p: Prepared) -> tuple[str, ...]:
