@@ -112,7 +112,8 @@ def test_mode_by_counts_a_more_cautious_mode_but_strategy_by_only_itself() -> No
     cautious_only = Metrics()
     for k in range(10):
         cautious_only.add(truth(k, 0.0), "CAUTION", "PASS_THROUGH", None, None)
-    assert results(Expectations(mode_by=(ModeBy(5.0, "EMERGENCY"),)), cautious_only)["mode_by EMERGENCY by 5 s"] == (False, "never EMERGENCY")
+    got = results(Expectations(mode_by=(ModeBy(5.0, "EMERGENCY"),)), cautious_only)
+    assert got["mode_by EMERGENCY by 5 s"] == (False, "never EMERGENCY")
 
 
 def test_a_clean_run_meets_its_expectations() -> None:
