@@ -8,7 +8,7 @@ what counts as a number at all is decided by ``readings.py``.
 from __future__ import annotations
 
 import math
-from dataclasses import astuple, dataclass
+from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
@@ -73,8 +73,9 @@ class Cues:
 
     def values(self) -> list[float]:
         """The cues as floats in CUE_NAMES order; a field that is not a reading (readings.py: text, bytes,
-        bools, Decimal, arrays, ...) becomes NaN, which is unknown = worst."""
-        return [cue_value(v) for v in astuple(self)]
+        bools, Decimal, arrays, ...) becomes NaN, which is unknown = worst. The fields are read as they are
+        (``dataclasses.astuple`` would deep-copy each one: slower, and a hostile object's ``__deepcopy__`` could raise)."""
+        return [cue_value(getattr(self, name)) for name in CUE_NAMES]
 
     def as_array(self) -> np.ndarray:
         """The cues as a float vector in CUE_NAMES order (non-numbers become NaN)."""

@@ -349,3 +349,16 @@ def test_keyboard_interrupt_and_system_exit_from_the_steering_function_propagate
 
     with pytest.raises(signal):
         fg.FearGuard(steer).step(fg.Observation(t_s=0.0, cues=fg.Cues(*CALM)))
+
+
+class _NoCopies(float):
+    """A float subclass (a reading) whose deep copy raises: cues are read as they are, never copied."""
+
+    def __deepcopy__(self, memo: object) -> float:
+        raise RuntimeError("no copies")
+
+
+def test_a_cue_that_refuses_to_be_copied_is_read_not_an_internal_error() -> None:
+    cmd = settle(fg.Cues(_NoCopies(0.9), 120.0, 0.0, 3.0, 0.5))
+    no_internal_error(cmd)
+    assert cmd.mode is fg.Mode.NORMAL
