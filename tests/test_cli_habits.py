@@ -85,6 +85,14 @@ def test_replay_wraps_your_steering_function_and_vehicle(shared_data: Path, tmp_
     assert max(r["speed_limit_mps"] for r in records) > 2.0  # a road car is not capped at the 1:10 car's 2 m/s
 
 
+def test_replay_counts_the_frames_its_range_selects_not_the_whole_recording(shared_data: Path, tmp_path: Path, capsys) -> None:
+    assert main(["replay", str(shared_data / VIDEO), "--to", "20f", "--every", "2", "--no-plots", "--out", str(tmp_path / "o")]) == 0
+    out = capsys.readouterr().out
+    assert "frames 10 of 10 selected by --from/--to/--every (221 in the recording)" in out
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert (summary["selected_frames"], summary["processed_frames"], summary["expected_frames"]) == (10, 10, 221)
+
+
 @pytest.mark.parametrize(("args", "says"), [
     (["--steer", "no_such_module_xyz:steer"], "SteerImportError: --steer no_such_module_xyz:steer: cannot import"),
     (["--vehicle", "no_such_car"], "VehicleFileError: no_such_car: --vehicle: neither a preset"),

@@ -237,8 +237,12 @@ def _print_replay_summary(summary: dict, out_dir: object) -> None:
     levels = summary.get("fear_level_share", {})
     modes = summary.get("mode_share", {})
     fps = summary.get("processing_fps")
-    print(f"frames {summary.get('processed_frames', 0)} of {summary.get('expected_frames')} "
-          f"({fps:.0f} frames/s)" if fps else f"frames {summary.get('processed_frames', 0)}")
+    total, selected = summary.get("expected_frames"), summary.get("selected_frames")
+    of = f" of {selected}" if selected is not None else ""
+    if total is not None and selected != total:
+        of += f" selected by --from/--to/--every ({total} in the recording)"
+    rate = f" ({fps:.0f} frames/s)" if fps else ""
+    print(f"frames {summary.get('processed_frames', 0)}{of}{rate}")
     print("fear level  " + "  ".join(f"{k} {100 * v:.0f}%" for k, v in levels.items()))
     print("mode        " + "  ".join(f"{k} {100 * v:.0f}%" for k, v in modes.items()))
     episodes = summary.get("emergency_episodes", [])

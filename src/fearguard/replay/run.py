@@ -108,7 +108,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     summary = stats.to_json()
     summary.update(
         source=str(source_path), kind=source.kind, fps=source.fps, expected_frames=source.expected_frames,
-        processed_frames=done, processing_fps=done / elapsed if elapsed > 0 else None, interrupted=interrupted,
+        selected_frames=expected, processed_frames=done, processing_fps=done / elapsed if elapsed > 0 else None, interrupted=interrupted,
         skipped=[{"frame": s.index, "reason": s.reason} for s in source.skipped], stopped_early=source.stopped_early,
         source_notes=list(source.notes), log_field_units=dict(source.log_field_units),
         vehicle={"has_ultrasonic": has_us, "has_qr_localisation": options.qr_localisation},
