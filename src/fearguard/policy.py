@@ -30,6 +30,8 @@ TIME_EPS_S = 1e-9  # [s] slack in time comparisons, so that 10 steps of 0.1 s co
 
 
 class Mode(Enum):
+    """The supervisor's modes, declared from least to most cautious (expectations such as ``mode_by`` rely on the order)."""
+
     NORMAL = "NORMAL"
     CAUTION = "CAUTION"
     EMERGENCY = "EMERGENCY"

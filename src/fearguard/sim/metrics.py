@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from fearguard.policy import Mode
 from fearguard.readings import finite_reading
 from fearguard.sim.scenario_values import EXPECTATION_NAMES, Expectations
 from fearguard.sim.world import Truth
@@ -260,7 +261,7 @@ def _stopped_before_obstacle(want: bool, run: RunMetrics, rows: Sequence[Row]) -
                               detail + (f"; {run.collisions} collision(s)" if run.collisions else ""))]
 
 
-MODE_ORDER = ("NORMAL", "CAUTION", "EMERGENCY")  # from least to most cautious
+MODE_ORDER = tuple(m.name for m in Mode)  # policy.Mode declares its members from least to most cautious
 
 
 def _at_least(field: str, seen: str | None, wanted: str) -> bool:
