@@ -49,12 +49,21 @@ def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadR
 
 def lane_confidence(
     left: LaneLine | None, right: LaneLine | None, region: RoadRegion, agreement_left: float = 1.0, agreement_right: float = 1.0,
-    occlusion: float = 0.0, clipped_share: float = 0.0, signal_to_noise: float = float("inf"),
+    occlusion: float = 0.0, clipped_share: float = 0.0, signal_to_noise: float = float("inf"), *, geometry: float | None = None,
+    out_of_view: tuple[bool, bool] = (False, False),
 ) -> LaneEvidence:
-    """Confidence 0..1 in the ego lane's boundaries, with its factors."""
+    """Confidence 0..1 in the ego lane's boundaries, with its factors. ``geometry``: the plausibility of the pair when
+    the caller measured it in the ground plane (a bending lane, ``ground_lanes``), instead of the image lines'.
+    ``out_of_view``: a missing side that the lane model places outside the picture (the inner line of a tight curve)
+    is not missing evidence — the seen side's support stands for both."""
     s_l = left.support if left is not None else 0.0
     s_r = right.support if right is not None else 0.0
-    geometry = geometry_plausibility(left, right, region) if left is not None and right is not None else 1.0
+    if left is None and out_of_view[0]:
+        s_l = s_r
+    if right is None and out_of_view[1]:
+        s_r = s_l
+    if geometry is None:
+        geometry = geometry_plausibility(left, right, region) if left is not None and right is not None else 1.0
     agree = min(agreement_left if left is not None else 1.0, agreement_right if right is not None else 1.0)
     visibility = _unit(1.0 - occlusion / OCCLUDED_BLIND) * _unit(1.0 - clipped_share / CLIPPED_BLIND)
     visibility *= 1.0 - NOISE_WEIGHT * (1.0 - _unit(signal_to_noise / SNR_ACCEPTABLE))

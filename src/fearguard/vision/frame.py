@@ -28,6 +28,7 @@ from fearguard.camera import CameraModel
 from fearguard.observation import Lead, LeadBox
 from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
 from fearguard.vision.exposure import Exposure, road_exposure
+from fearguard.vision.ground_lanes import GroundLanes, GroundLaneSpec, aim_point, ground_lanes_in_image
 from fearguard.vision.lanes import LaneLine, RoadRegion, detect_lanes, region_mask, road_region, work_size
 from fearguard.vision.lead import detect_lead, lead_from_box
 from fearguard.vision.obstacle import Obstacle, detect_obstacle
@@ -64,6 +65,7 @@ class FrameAnalysis:
     reasons: tuple[str, ...] = ()
     timings_ms: Mapping[str, float] = field(default_factory=dict)
     obstacle: Obstacle | None = None  # anything standing in the ego lane, with its ground-plane range (vision/obstacle.py)
+    ground: GroundLanes | None = None  # the bending lane in the ground plane, when the pipeline fits one (vision/ground_lanes.py)
 
 
 def invalid_frame_reason(frame: object) -> str | None:
@@ -95,13 +97,20 @@ class FramePipeline:
     """
 
     def __init__(
-        self, camera: CameraModel | None = None, fps: float = 20.0, *, trackers: Callable[[], Trackers] = Trackers.tracking
+        self, camera: CameraModel | None = None, fps: float = 20.0, *, trackers: Callable[[], Trackers] = Trackers.tracking,
+        ground: GroundLaneSpec | None = None,
     ) -> None:
         self._camera = camera
+        self._ground = ground if camera is not None and camera.mount_height_m is not None else None
         self.period_s = 1.0 / fps if fps > 0 else 0.05
         self._new_trackers = trackers
         self.trackers = trackers()
         self._frames = 0
+
+    @property
+    def ground(self) -> GroundLaneSpec | None:
+        """The road the bending ground-plane lane model is fitted for (None: straight image lines)."""
+        return self._ground
 
     @property
     def camera(self) -> CameraModel | None:
@@ -124,7 +133,7 @@ class FramePipeline:
         self._frames += 1
         t = t_s if t_s is not None and math.isfinite(t_s) else self._frames * self.period_s
         qr = scan_qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
-        return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr)
+        return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr, ground=self._ground)
 
 
 def analyze_frame(frame_bgr: object, camera: CameraModel | None = None) -> FrameAnalysis:
@@ -165,6 +174,8 @@ class Lanes:
     paint_integral: np.ndarray  # integral image of the marking pixels over the road rows (the ridge tables'; occlusion's too)
     aim_row_px: float  # the look-ahead row the steering aims at
     lane_width_px: float  # lane width at that row (measured, remembered or the default)
+    ground: GroundLanes | None = None  # the ground-plane boundaries, when the lane model bends
+    out_of_view: tuple[bool, bool] = (False, False)  # a missing side the lane model places outside the picture
 
 
 @dataclass(frozen=True)
@@ -194,9 +205,20 @@ def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
                     exposure=road_exposure(gray[band], mask[band]))
 
 
-def find_lanes(p: Prepared, trackers: Trackers, t_s: float) -> Lanes:
-    """Detect both boundaries (the tracks as priors), remember the lane width, fold the detections into the tracks."""
+def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSpec | None = None) -> Lanes:
+    """Detect both boundaries (the tracks as priors), remember the lane width, fold the detections into the tracks.
+    With a ground spec: the bending ground-plane model, its boundaries drawn into the image as their near chords."""
     region = p.region
+    if ground is not None:
+        fit = ground_lanes_in_image(p.hls, p.mask, region, p.camera, ground, trackers.ground.priors(t_s))
+        if fit is not None:
+            lanes, (left, right), (agree_l, agree_r), features, integral, hidden = fit
+            trackers.ground.remember(t_s, lanes)
+            v_aim = lookahead_row(region)
+            width_px = trackers.memory.remember_width(left, right, v_aim, region.width_px)
+            return Lanes(left=left, right=right, seen_left=left, seen_right=right, agreement_left=agree_l, agreement_right=agree_r,
+                         features=features, paint_integral=integral, aim_row_px=v_aim, lane_width_px=width_px, ground=lanes,
+                         out_of_view=hidden)
     det = detect_lanes(p.hls, region, p.mask, trackers.lanes.current(region))
     v_aim = lookahead_row(region)
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
@@ -243,7 +265,8 @@ def judge_confidence(p: Prepared, lanes: Lanes, occlusion_share: float) -> LaneE
     """lane_confidence of this frame from the accepted detections, their agreement, occlusion and clipped pixels."""
     clipped = p.exposure.saturated_share + p.exposure.black_share
     return lane_confidence(lanes.seen_left, lanes.seen_right, p.region, lanes.agreement_left, lanes.agreement_right,
-                           occlusion_share, clipped, p.exposure.signal_to_noise)
+                           occlusion_share, clipped, p.exposure.signal_to_noise,
+                           geometry=lanes.ground.geometry if lanes.ground is not None else None, out_of_view=lanes.out_of_view)
 
 
 def read_qr(p: Prepared) -> tuple[str, ...]:
@@ -251,14 +274,22 @@ def read_qr(p: Prepared) -> tuple[str, ...]:
     return tuple(m.payload for m in detect_qr(p.bgr))
 
 
-def steer(p: Prepared, lanes: Lanes, trackers: Trackers) -> float | None:
-    """Bearing of the lane centre at the look-ahead row; no boundary: the held angle (None without history)."""
+def steer(p: Prepared, lanes: Lanes, trackers: Trackers, ground: GroundLaneSpec | None = None) -> float | None:
+    """Bearing of the lane centre at the look-ahead row (the ground model's: its aim point); no boundary: the held
+    angle (None without history)."""
+    if lanes.ground is not None and ground is not None:
+        aim = aim_point(lanes.ground, ground)
+        if aim is None:
+            return trackers.memory.hold(None)
+        edge = math.degrees(math.atan2(p.camera.width_px / 2.0, p.camera.fx_px))  # pure pursuit saturates at the picture's edge
+        return trackers.memory.hold(max(-edge, min(edge, math.degrees(math.atan2(aim[1], aim[0])))))
     u_aim = aim_point_u(lanes.left, lanes.right, lanes.aim_row_px, lanes.lane_width_px)
     return trackers.memory.hold(steering_from_aim(u_aim, p.scale, p.camera) if u_aim is not None else None)
 
 
 def _analyze(
-    frame: object, camera: CameraModel | None, trackers: Trackers, t_s: float, lead_box: LeadBox | None, *, qr: bool
+    frame: object, camera: CameraModel | None, trackers: Trackers, t_s: float, lead_box: LeadBox | None, *, qr: bool,
+    ground: GroundLaneSpec | None = None,
 ) -> FrameAnalysis:
     """The stages in order, each timed."""
     bad = invalid_frame_reason(frame)
@@ -268,7 +299,7 @@ def _analyze(
     t0 = clock()
     p = prepare(frame, camera)
     t1 = clock()
-    lanes = find_lanes(p, trackers, t_s)
+    lanes = find_lanes(p, trackers, t_s, ground)
     t2 = clock()
     seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box)
     t3 = clock()
@@ -277,7 +308,7 @@ def _analyze(
     t4 = clock()
     payloads = read_qr(p) if qr else ()
     t5 = clock()
-    steering = steer(p, lanes, trackers)
+    steering = steer(p, lanes, trackers, ground)
     reasons = () if math.isfinite(p.exposure.brightness) else ("camera: road region empty: brightness unknown",)
     timings = {"prepare": (t1 - t0) * 1e3, "lanes": (t2 - t1) * 1e3, "lead_occlusion": (t3 - t2) * 1e3,
                "confidence": (t4 - t3) * 1e3, "qr": (t5 - t4) * 1e3, "steering": (clock() - t5) * 1e3}
@@ -285,7 +316,7 @@ def _analyze(
         lane_confidence=confidence, brightness=p.exposure.brightness, occlusion=seen.occlusion, lead=seen.lead,
         qr_payloads=payloads, steering_deg=steering, exposure=p.exposure, evidence=evidence, left=lanes.left,
         right=lanes.right, region=p.region, scale=p.scale, lead_box=seen.box, road_reference=seen.road_reference,
-        reasons=reasons, timings_ms=timings, obstacle=seen.obstacle,
+        reasons=reasons, timings_ms=timings, obstacle=seen.obstacle, ground=lanes.ground,
     )
 
 

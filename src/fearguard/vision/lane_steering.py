@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from fearguard.camera import CameraModel
 from fearguard.vision.frame import FrameAnalysis, FramePipeline
+from fearguard.vision.ground_lanes import GroundLaneSpec
 
 
 class HoughLaneSteering:
@@ -19,8 +20,8 @@ class HoughLaneSteering:
     lane_confidence will be low at the same time, so it slows or stops the car.
     """
 
-    def __init__(self, camera: CameraModel | None = None, fps: float = 20.0) -> None:
-        self._pipeline = FramePipeline(camera, fps)
+    def __init__(self, camera: CameraModel | None = None, fps: float = 20.0, *, ground: GroundLaneSpec | None = None) -> None:
+        self._pipeline = FramePipeline(camera, fps, ground=ground)
 
     @property
     def pipeline(self) -> FramePipeline:

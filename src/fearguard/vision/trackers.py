@@ -17,6 +17,7 @@ from typing import Protocol
 import numpy as np
 
 from fearguard.observation import LeadBox
+from fearguard.vision.ground_lanes import GroundLanes, GroundMemory, PassThroughGround
 from fearguard.vision.lane_tracker import LaneTracker, TrackedLanes
 from fearguard.vision.lanes import LaneLine, RoadRegion
 from fearguard.vision.lead import LeadTracker
@@ -40,6 +41,12 @@ class SteeringMemory(Protocol):
     def remember_width(self, left: LaneLine | None, right: LaneLine | None, v_px: float, width_px: int) -> float: ...
 
     def hold(self, steering_deg: float | None) -> float | None: ...
+
+
+class GroundTracking(Protocol):
+    def priors(self, t_s: float) -> GroundLanes | None: ...
+
+    def remember(self, t_s: float, lanes: GroundLanes) -> None: ...
 
 
 class ConfidenceSmoothing(Protocol):
@@ -117,16 +124,18 @@ class Trackers:
     memory: SteeringMemory
     confidence: ConfidenceSmoothing
     road: RoadMemory  # the road's appearance over recent frames (occlusion's reference)
+    ground: GroundTracking  # the bending lane's last boundaries (the ground model's priors)
 
     @classmethod
     def tracking(cls) -> Trackers:
         """The stateful form's: Kalman tracks, lane memory, confidence median."""
-        return cls(lanes=LaneTracker(), leads=LeadTracker(), memory=LaneMemory(), confidence=ConfidenceMedian(), road=RoadModel())
+        return cls(lanes=LaneTracker(), leads=LeadTracker(), memory=LaneMemory(), confidence=ConfidenceMedian(), road=RoadModel(),
+                   ground=GroundMemory())
 
     @classmethod
     def pass_through(cls) -> Trackers:
         """The stateless form's: every stand-in hands this frame's measurement back and remembers nothing."""
         return cls(
             lanes=PassThroughLanes(), leads=PassThroughLead(), memory=PassThroughMemory(), confidence=PassThroughConfidence(),
-            road=PassThroughRoad(),
+            road=PassThroughRoad(), ground=PassThroughGround(),
         )

@@ -61,6 +61,12 @@ def test_expert_keeps_the_lane(tmp_path: Path) -> None:
     assert 0.4 < s["progress_m"] < 0.6  # 0.2 m/s after a ~0.4 s rise
 
 
+def test_unguarded_baseline_drives_on_the_lane_steering_alone(tmp_path: Path) -> None:
+    s = drive(DriveOptions("straight_road", seconds=3, controller="unguarded", width_px=160, height_px=120, plots=False), tmp_path).summary
+    assert s["controller"] == "unguarded" and s["supervisor"] is None
+    assert s["departures"] == 0 and 0.4 < s["progress_m"] < 0.6  # cruise from the start, no supervisor to slow it
+
+
 def test_guarded_drive_writes_the_recorder_files(tmp_path: Path) -> None:
     result = drive(DriveOptions("straight_road", seconds=2, width_px=160, height_px=120, video=True), tmp_path)
     s = result.summary
@@ -88,10 +94,10 @@ def test_loop_route_is_one_lap(world: DuckietownWorld) -> None:
 
 def test_pure_pursuit_to_a_perfect_aim_point_keeps_the_lane() -> None:
     """The actuation alone: the true lane centre's bearing at the aim distance, through steering_action (no vision)."""
-    from fearguard.worlds.duckietown.preset import CAMERA_AHEAD_M, aim_distance_m, duckiebot_camera, steering_action
+    from fearguard.worlds.duckietown.preset import AIM_M, CAMERA_AHEAD_M, steering_action
 
     w = DuckietownWorld("loop_empty", width_px=160, height_px=120, render=False)
-    aim = aim_distance_m(duckiebot_camera(160, 120))
+    aim = AIM_M
     try:
         env, worst = w.env, 0.0
         for _ in range(450):  # 15 s: the first straight and the first curve

@@ -33,10 +33,10 @@ from fearguard.vision.lane_steering import HoughLaneSteering
 from fearguard.worlds.duckietown.metrics import STOPPED_SPEED_MPS, Sample, route_completion, summarize_drive
 from fearguard.worlds.duckietown.preset import (
     FRAME_RATE_HZ,
-    aim_distance_m,
     curvature_action,
     duckiebot_camera,
     duckiebot_limits,
+    duckietown_lane,
     steering_action,
 )
 from fearguard.worlds.duckietown.world import DuckietownWorld, Truth
@@ -100,9 +100,10 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     world = DuckietownWorld(o.map_name, width_px=o.width_px, height_px=o.height_px, seed=o.seed, domain_rand=o.domain_rand,
                             start_tile=o.start_tile, render=o.controller != "expert" or o.video)
     camera = duckiebot_camera(o.width_px, o.height_px)
-    aim_m = aim_distance_m(camera)
+    lane = duckietown_lane()
+    aim_m = lane.aim_m
     limits = duckiebot_limits(time_of_flight=o.range_sensor == "tof")
-    lanes = HoughLaneSteering(camera=camera, fps=FRAME_RATE_HZ)
+    lanes = HoughLaneSteering(camera=camera, fps=FRAME_RATE_HZ, ground=lane)
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
     guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=camera) if o.controller == "guarded" else None
     route = world.route_m()
@@ -125,7 +126,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
                 steering, speed = cmd.steering_deg, min(o.cruise_mps, cmd.speed_limit_mps)
                 action = steering_action(steering, speed, aim_m)
             elif o.controller == "unguarded":
-                steering = _unsupervised_steering(lanes, frame, last_steer, limits.max_steering_deg)
+                steering, _ = _unsupervised_steering(lanes, frame, last_steer, limits.max_steering_deg)
                 speed = o.cruise_mps
                 action = steering_action(steering, speed, aim_m)
             else:

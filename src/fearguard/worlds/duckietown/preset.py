@@ -6,13 +6,13 @@ Camera (gym-duckietown's DB18): vertical FOV 75°, square pixels, principal poin
 19.15° down, 0.108 m above the floor, 0.066 m ahead of the wheel axle, 30 frames/s.
 
 Actuation (the steering angle is the bearing of an aim point, as fearguard's lane steering gives it):
-the aim point sits at the bearing α on the ground ``aim_m`` ahead of the camera, i.e. at
-(x, y) = (CAMERA_AHEAD_M + aim_m, aim_m · tan α) from the axle; pure pursuit drives the arc through
-it, κ = 2·y / (x² + y²), and the yaw rate is ω = v·κ at the commanded speed v (so a stopped robot
-does not spin). The simulator's DuckietownEnv takes [vel, omega]; the nominal DB18 PWM dynamics of
-duckietown-world (u̇ = −5u + 1.5(V_r + V_l), ω̇ = −4ω + 15(V_r − V_l), with DuckietownEnv's
-wheel radius 0.0318 m, motor constant 27, baseline 0.102 m) settle at u = 0.699·vel and
-ω = 0.4455·omega, so the action is [v / SPEED_GAIN, ω / YAW_RATE_GAIN].
+the aim point is the lane centre ``aim_m`` from the camera (the ground-plane lane model's pure-pursuit
+point, ``AIM_M``), at the bearing α, i.e. at (x, y) = (CAMERA_AHEAD_M + aim_m · cos α, aim_m · sin α)
+from the axle; pure pursuit drives the arc through it, κ = 2·y / (x² + y²), and the yaw rate is
+ω = v·κ at the commanded speed v (so a stopped robot does not spin). The simulator's DuckietownEnv
+takes [vel, omega]; the nominal DB18 PWM dynamics of duckietown-world (u̇ = −5u + 1.5(V_r + V_l),
+ω̇ = −4ω + 15(V_r − V_l), with DuckietownEnv's wheel radius 0.0318 m, motor constant 27, baseline
+0.102 m) settle at u = 0.699·vel and ω = 0.4455·omega, so the action is [v / SPEED_GAIN, ω / YAW_RATE_GAIN].
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 from fearguard.camera import CameraModel
 from fearguard.vehicle import VehicleLimits
+from fearguard.vision.ground_lanes import GroundLaneSpec
 
 # -- camera (gym_duckietown.simulator constants) -----------------------------------------------
 CAMERA_VFOV_DEG = 75.0  # [deg] vertical field of view
@@ -39,6 +40,10 @@ MAX_SPEED_MPS = 0.6  # [m/s] both wheels at full duty: u = 1.5/5 · 2
 ACTUATION_DELAY_S = 0.15  # [s] the simulator's command delay (get_DB18_nominal(delay=0.15))
 SPEED_TIME_CONSTANT_S = 0.2  # [s] 1/u1 of the PWM dynamics: the speed settles exponentially
 
+AIM_M = 0.25  # [m] from the camera: the lane-centre point the steering heads for (the simulator's expert looks 0.25 m
+#   ahead too). The tightest lane centre (a left curve's, radius ≈ 0.21 m: the expert's curvature there is 4.8/m) is
+#   then ≈ 37° off the heading, inside the camera's ±45° view; 0.29 m (the image model's look-ahead) asks for 43°+
+
 # -- body and lane (Duckietown appearance specification; tile 0.585 m) -------------------------
 WHEEL_OUTER_HALF_TRACK_M = 0.065  # [m] centre line of the robot to the outer face of a wheel (13 cm wide)
 ROBOT_FRONT_M = CAMERA_AHEAD_M  # [m] axle to the front bumper (the simulator's box ends at the camera)
@@ -55,17 +60,10 @@ def duckiebot_camera(width_px: int = DEFAULT_FRAME_PX[0], height_px: int = DEFAU
     return CameraModel(width_px, height_px, f, f, width_px / 2.0, height_px / 2.0, (), CAMERA_HEIGHT_M, CAMERA_PITCH_DEG)
 
 
-def aim_distance_m(camera: CameraModel) -> float:
-    """Ground distance ahead of the camera of the row fearguard's lane steering aims at (its look-ahead row)."""
-    from fearguard.vision.lanes import road_region, work_size
-    from fearguard.vision.steering import lookahead_row
-
-    w, h = work_size(camera.width_px, camera.height_px)
-    row = lookahead_row(road_region(w, h, camera)) * camera.height_px / h
-    distance = camera.ground_range_m(row)
-    if distance is None:
-        raise ValueError(f"the look-ahead row {row:.0f} px is at or above the horizon of this camera")
-    return distance
+def duckietown_lane() -> GroundLaneSpec:
+    """The Duckietown road for the ground-plane lane model: 0.236 m between the inner edges of the yellow line and the
+    white tape, fitted over the near 0.07-0.5 m, aiming AIM_M ahead."""
+    return GroundLaneSpec(lane_width_m=WHITE_INNER_M - YELLOW_INNER_M, near_m=0.07, far_m=0.5, aim_m=AIM_M)
 
 
 def duckiebot_limits(*, time_of_flight: bool = False) -> VehicleLimits:
@@ -102,9 +100,10 @@ class Action:
 
 
 def pursuit_curvature_per_m(bearing_deg: float, aim_m: float) -> float:
-    """Curvature (1/m, + = left) of the arc from the axle through the aim point at ``bearing_deg`` seen ``aim_m`` ahead."""
-    x = CAMERA_AHEAD_M + aim_m
-    y = aim_m * math.tan(math.radians(max(-89.0, min(89.0, bearing_deg))))
+    """Curvature (1/m, + = left) of the arc from the axle through the aim point ``aim_m`` from the camera at ``bearing_deg``."""
+    a = math.radians(max(-89.0, min(89.0, bearing_deg)))
+    x = CAMERA_AHEAD_M + aim_m * math.cos(a)
+    y = aim_m * math.sin(a)
     return 2.0 * y / (x * x + y * y)
 
 

@@ -1,0 +1,460 @@
+"""A lane model that bends: both boundaries fitted in the ground plane, sides decided by colour.
+
+With a camera model (mount height and pitch) every marking pixel of the near road projects to a ground point
+(x forward, y left, metres, from the camera's foot). There a boundary is a circular arc or a straight line — the
+shapes roads and Duckietown tiles are built from — however the image shows it: a tight curve, tape that crosses
+the picture or leaves it sideways. A Duckietown-style road says which side is which by colour — the yellow centre
+line on the left of the ego lane, the white edge on its right — so the sides are not guessed from the image slope
+(which flips on a curve):
+
+    marking pixels (row and column ridges) → ground points → yellow: left; white right of it: right
+      → robust circle-or-line fit per side (RANSAC over 3-point hypotheses, then a least-squares refit on the inliers)
+      → support (share of the near range covered), width of the lane, agreement with last frame's fit
+      → the lane centre (each boundary offset by half a lane) → the pure-pursuit point ``aim_m`` from the camera
+
+A boundary is a·(x²+y²) + b·x + c·y + d = 0 normalised to b² + c² − 4·a·d = 1 (Pratt), which makes one formula the
+signed Euclidean distance for circles and lines alike (a = 0 is a line; curvature is 2|a|). Written by hand: it is
+a few array operations over the projected points, and no library fits circles robustly to colour-labelled sets.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from functools import lru_cache
+
+import cv2
+import numpy as np
+
+from fearguard.camera import CameraModel
+from fearguard.vision.lanes import LaneLine, RoadRegion, smoothed_light
+
+HYPOTHESES = 48  # [-] RANSAC hypotheses per side (deterministic: a fixed-seed generator)
+INLIER_M = 0.02  # [m] a point this close to a boundary curve lies on it (tape is 2-5 cm wide)
+MIN_POINTS = 12  # [-] fewer marking points than this on a side: no boundary there
+BIN_M = 0.02  # [m] the near range (distance from the camera) is cut into bins of this length; support is the share
+SUPPORT_FULL = 0.35  # [-] of bins with inliers, saturating here (a dashed centre line covers about half its length)
+MAX_POINTS = 1500  # [-] points per side kept for the fit (an even subsample beyond: the cost stays bounded)
+GATE_M = 0.06  # [m] with last frame's fit as a prior, points farther than this from it are not this side's
+WIDTH_TOLERANCE = (0.3, 0.6)  # [-] relative lane-width error: full plausibility up to the first, none from the second
+AGREEMENT_M = 0.35  # [-] of the lane width: mean disagreement with the prior at which agreement reaches 0
+WHITE_SAT_MAX = 60  # [0..255] white paint is unsaturated (Duckietown's mat: 5-26, its grass: 77-207)
+YELLOW_HUE = (14, 34)  # [OpenCV hue 0..180] yellow paint (Duckietown's: 26-29); grass (38-48) is not yellow here
+YELLOW_SAT_MIN = 70  # [0..255]
+YELLOW_LIGHT_MIN = 60  # [0..255]
+RIDGE_MIN = 14  # [grey levels] paint is this much brighter than the road around it (lanes.RIDGE_MIN) ...
+RIDGE_RATIO = 0.6  # [-] ... and by this share of the road's lightness (tape on a mat: 2-3; the mat's own pattern: < 0.6)
+RIDGE_WINDOW = (0.12, 0.35)  # [-] of the width: far and near top-hat windows, in rows and in columns
+MAX_CURVATURE = 8.0  # [1/m] a boundary bending tighter (radius < 12.5 cm) is no road edge a car can follow
+STRAIGHT = 1e-6  # [1/m] |a| below this (radius beyond 500 km) is a straight line
+EXTEND_M = 0.3  # [m] the model is followed this far beyond the last marking seen (the aim point may lie there)
+STEP_M = 0.01  # [m] spacing of the points sampled along a boundary
+
+
+@dataclass(frozen=True)
+class GroundLaneSpec:
+    """What the ground model must know of the road: its lane and paint in metres, and where to fit."""
+
+    lane_width_m: float  # between the inner edges of the two boundary markings
+    near_m: float = 0.07  # fit range, from the camera's foot: the nearest ground the camera sees ...
+    far_m: float = 0.5  # ... and the farthest where the projection is still precise
+    aim_m: float = 0.25  # distance from the camera of the steering's pure-pursuit point on the lane centre
+
+
+@dataclass(frozen=True)
+class GroundBoundary:
+    """One boundary: a·(x²+y²) + b·x + c·y + d = 0 (metres; b² + c² − 4ad = 1), oriented so that the signed distance is
+    positive to the left of the direction away from the camera; with the nearest and farthest marking seen on it."""
+
+    a: float
+    b: float
+    c: float
+    d: float
+    start: tuple[float, float]  # the inlier nearest the camera
+    end: tuple[float, float]  # the inlier farthest along the boundary from it
+    support: float  # [0..1] share of the near range's bins with inliers, saturating at SUPPORT_FULL
+    inliers: int
+
+    def distance(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Signed Euclidean distance of the points from the boundary (+ = left of it)."""
+        return _distance(np.array([self.a, self.b, self.c, self.d]), x, y)
+
+    @property
+    def curvature_per_m(self) -> float:
+        """1 / radius (0 for a line)."""
+        return 2.0 * abs(self.a)
+
+    def offset(self, delta_m: float) -> GroundBoundary | None:
+        """The parallel curve delta_m to the left (negative: right); None if it would pass through the circle's centre."""
+        k = 1.0 + 2.0 * self.a * delta_m
+        if k <= 1e-6:
+            return None
+        a, b, c = self.a / k, self.b / k, self.c / k
+        d = (b * b + c * c - 1.0) / (4.0 * a) if abs(a) > STRAIGHT else self.d - delta_m
+        moved = [tuple(np.asarray(p) + delta_m * self._normal(*p)) for p in (self.start, self.end)]
+        start, end = (float(moved[0][0]), float(moved[0][1])), (float(moved[1][0]), float(moved[1][1]))
+        return replace(self, a=a, b=b, c=c, d=d, start=start, end=end)
+
+    def samples(self, extend_m: float = 0.0) -> np.ndarray:
+        """Points (n, 2) along the boundary from its start, past its end by extend_m, STEP_M apart."""
+        p0 = self._foot(self.start)
+        p1 = self._foot(self.end)
+        if abs(self.a) <= STRAIGHT:
+            t = p1 - p0
+            length = float(np.hypot(*t))
+            t = t / length if length > 1e-9 else np.array([1.0, 0.0])
+            s = np.arange(0.0, length + extend_m + STEP_M, STEP_M)
+            return p0[None, :] + s[:, None] * t[None, :]
+        centre = np.array([-self.b, -self.c]) / (2.0 * self.a)
+        radius = 1.0 / (2.0 * abs(self.a))
+        t0 = math.atan2(*(p0 - centre)[::-1])
+        sweep = (math.atan2(*(p1 - centre)[::-1]) - t0 + math.pi) % (2 * math.pi) - math.pi
+        direction = 1.0 if sweep >= 0 else -1.0
+        span = abs(sweep) + extend_m / radius
+        theta = t0 + direction * np.arange(0.0, span + STEP_M / radius, STEP_M / radius)
+        return centre[None, :] + radius * np.stack([np.cos(theta), np.sin(theta)], axis=1)
+
+    def _normal(self, x: float, y: float) -> np.ndarray:
+        g = np.array([2 * self.a * x + self.b, 2 * self.a * y + self.c])
+        return g / max(1e-12, float(np.hypot(*g)))
+
+    def _foot(self, p: tuple[float, float]) -> np.ndarray:
+        """The point of the curve nearest p."""
+        q = np.asarray(p, dtype=np.float64)
+        return q - float(self.distance(q[0:1], q[1:2])[0]) * self._normal(*q)
+
+
+@dataclass(frozen=True)
+class GroundLanes:
+    """Both boundaries in the ground plane (None where not found) and how plausible they are as one lane."""
+
+    left: GroundBoundary | None
+    right: GroundBoundary | None
+    geometry: float  # [0..1] lane width against the spec (1 with one boundary)
+    points: int  # marking points projected
+
+
+@dataclass(frozen=True)
+class GroundGrid:
+    """Per working-image row: its ground range and metres of lateral offset per pixel (None rows: beyond the range)."""
+
+    top_v_px: int
+    x_m: np.ndarray  # (rows,) forward distance of each row from top_v_px on
+    lateral_m_per_px: np.ndarray  # (rows,)
+    cx_px: float
+
+
+@lru_cache(maxsize=8)
+def ground_grid(camera: CameraModel, top_v_px: int, bottom_v_px: int, far_m: float) -> GroundGrid | None:
+    """The rows of a working-size camera whose ground lies within far_m (None: the camera cannot see the ground)."""
+    if camera.mount_height_m is None:
+        return None
+    p = math.radians(camera.pitch_deg)
+    rows, xs, lat = [], [], []
+    for v in range(top_v_px, bottom_v_px + 1):
+        x = camera.ground_range_m(v)
+        if x is None or x > far_m:
+            continue
+        rows.append(v)
+        xs.append(x)
+        lat.append((x * math.cos(p) + camera.mount_height_m * math.sin(p)) / camera.fx_px)
+    if not rows:
+        return None
+    first = rows[0]
+    return GroundGrid(first, np.array(xs), np.array(lat), camera.cx_px)
+
+
+def marking_masks(hls: np.ndarray, light: np.ndarray, mask: np.ndarray, top_v_px: int, bottom_v_px: int) -> tuple[np.ndarray, np.ndarray]:
+    """(white, yellow) uint8 0/255 paint masks of the road rows. White: brighter than its surroundings along the row
+    *or* the column (tape crossing the picture on a curve is thin only vertically) and unsaturated; yellow: by colour."""
+    white = np.zeros(mask.shape, np.uint8)
+    yellow = np.zeros(mask.shape, np.uint8)
+    w = mask.shape[1]
+    split = (top_v_px + bottom_v_px) // 2
+    for lo, hi, share in ((top_v_px, split, RIDGE_WINDOW[0]), (split, bottom_v_px + 1, RIDGE_WINDOW[1])):
+        if hi <= lo:
+            continue
+        band = light[lo:hi]
+        k = max(3, int(share * w) | 1)
+        ridge = np.maximum(cv2.morphologyEx(band, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (k, 1))),
+                           cv2.morphologyEx(band, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (1, k))))
+        background = band.astype(np.int16) - ridge
+        hue, sat = hls[lo:hi, :, 0], hls[lo:hi, :, 2]
+        bright = (ridge >= RIDGE_MIN) & (ridge >= RIDGE_RATIO * background) & (sat <= WHITE_SAT_MAX)
+        paint = (hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]) & (sat >= YELLOW_SAT_MIN) & (band >= YELLOW_LIGHT_MIN)
+        white[lo:hi] = bright * np.uint8(255)
+        yellow[lo:hi] = paint * np.uint8(255)
+    # an opening removes specks (grass blades, the mat's grain) that no tape is as thin as
+    speck = cv2.getStructuringElement(cv2.MORPH_RECT, (3, 3))
+    return (cv2.bitwise_and(cv2.morphologyEx(white, cv2.MORPH_OPEN, speck), mask),
+            cv2.bitwise_and(cv2.morphologyEx(yellow, cv2.MORPH_OPEN, speck), mask))
+
+
+def inner_edges(paint: np.ndarray, lane_is_right: bool) -> np.ndarray:
+    """bool: the paint pixels on the edge that faces the ego lane — the lane lies right of a left boundary (or left of
+    a right one) and, for a marking crossing the picture ahead, below it. Fitting that edge, not the whole tape, keeps
+    the lane width right at any offset and the curve thin. Beyond the image counts as paint (no edge there)."""
+    p = paint > 0
+    side = np.ones_like(p)
+    if lane_is_right:
+        side[:, :-1] = p[:, 1:]
+    else:
+        side[:, 1:] = p[:, :-1]
+    below = np.ones_like(p)
+    below[:-1] = p[1:]
+    return p & ~(side & below)
+
+
+def ground_points(white: np.ndarray, yellow: np.ndarray, grid: GroundGrid, bottom_v_px: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(x, y, is_yellow) of the inner-edge pixels of the markings in the grid's rows: the yellow line's (a left
+    boundary) and the white paint's (a right one)."""
+    band = slice(grid.top_v_px, bottom_v_px + 1)
+    ry, cy = np.nonzero(inner_edges(yellow[band], lane_is_right=True))
+    rw, cw = np.nonzero(inner_edges(white[band], lane_is_right=False))
+    r, c = np.concatenate([ry, rw]), np.concatenate([cy, cw])
+    x = grid.x_m[r]
+    y = -(c - grid.cx_px) * grid.lateral_m_per_px[r]
+    return x, y, np.arange(len(r)) < len(ry)
+
+
+def _distance(v: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Signed distances of points (x, y) from normalised curves v (4,) or (H, 4) → (N,) or (H, N)."""
+    curves = np.atleast_2d(v)
+    a, b, c, d = (curves[:, i : i + 1] for i in range(4))
+    p = a * (x * x + y * y)[None, :] + b * x[None, :] + c * y[None, :] + d
+    dist = 2.0 * p / (1.0 + np.sqrt(np.maximum(1.0 + 4.0 * a * p, 0.0)))
+    return dist[0] if v.ndim == 1 else dist
+
+
+def _normalised(v: np.ndarray) -> np.ndarray:
+    """Curves (H, 4) scaled to b² + c² − 4ad = 1 (rows that are no real curve become NaN)."""
+    s = v[:, 1] ** 2 + v[:, 2] ** 2 - 4.0 * v[:, 0] * v[:, 3]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return v / np.sqrt(np.where(s > 1e-18, s, np.nan))[:, None]
+
+
+def _refit(x: np.ndarray, y: np.ndarray) -> np.ndarray | None:
+    """Least-squares circle or line through the points: the smallest singular vector of [x²+y², x, y, 1] on the
+    centred and scaled points (conditioning), mapped back and normalised."""
+    mx, my = float(x.mean()), float(y.mean())
+    scale = float(np.sqrt(np.mean((x - mx) ** 2 + (y - my) ** 2))) or 1.0
+    qx, qy = (x - mx) / scale, (y - my) / scale
+    m = np.stack([qx * qx + qy * qy, qx, qy, np.ones_like(qx)], axis=1)
+    a_, b_, c_, d_ = np.linalg.svd(m, full_matrices=False)[2][-1]
+    a = a_ / scale**2
+    b = -2.0 * a * mx + b_ / scale
+    c = -2.0 * a * my + c_ / scale
+    d = a * (mx * mx + my * my) - (b_ * mx + c_ * my) / scale + d_
+    v = _normalised(np.array([[a, b, c, d]]))[0]
+    return None if not np.isfinite(v).all() else v
+
+
+def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: GroundBoundary | None, seed: int = 0) -> GroundBoundary | None:
+    """The boundary best supported by the points (x, y): RANSAC over the circles (or lines) through 3 points, one from
+    each third of the points by distance from the camera, refitted on the inliers. A prior (last frame's boundary)
+    gates the points first."""
+    if prior is not None:
+        near = np.abs(prior.distance(x, y)) <= GATE_M
+        x, y = x[near], y[near]
+    if len(x) < MIN_POINTS:
+        return None
+    if len(x) > MAX_POINTS:
+        keep = np.linspace(0, len(x) - 1, MAX_POINTS).astype(np.int64)
+        x, y = x[keep], y[keep]
+    r = np.hypot(x, y)
+    thirds = np.array_split(np.argsort(r, kind="stable"), 3)
+    rng = np.random.default_rng(seed)
+    picks = np.stack([t[rng.integers(0, len(t), HYPOTHESES)] for t in thirds], axis=1)  # (H, 3)
+    px, py = x[picks], y[picks]
+    m = np.stack([px * px + py * py, px, py, np.ones_like(px)], axis=2)  # (H, 3, 4): each hypothesis its null vector
+    curves = _normalised(np.linalg.svd(m)[2][:, -1, :])
+    curves = curves[np.isfinite(curves).all(axis=1) & (2.0 * np.abs(curves[:, 0]) <= MAX_CURVATURE)]
+    if len(curves) == 0:
+        return None
+    counts = (np.abs(_distance(curves, x, y)) <= INLIER_M).sum(axis=1)
+    best = curves[int(np.argmax(counts))]
+    inlier = np.abs(_distance(best, x, y)) <= INLIER_M
+    if inlier.sum() < MIN_POINTS:
+        return None
+    refit = _refit(x[inlier], y[inlier])
+    if refit is not None and 2.0 * abs(refit[0]) <= MAX_CURVATURE:
+        refined = np.abs(_distance(refit, x, y)) <= INLIER_M
+        if refined.sum() >= inlier.sum():
+            best, inlier = refit, refined
+    return _oriented(best, x[inlier], y[inlier], spec)
+
+
+def _oriented(v: np.ndarray, x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec) -> GroundBoundary:
+    """The boundary with its ends, its support, and its sign chosen so that + is left of the way away from the camera."""
+    r = np.hypot(x, y)
+    i0 = int(np.argmin(r))
+    i1 = int(np.argmax(np.hypot(x - x[i0], y - y[i0])))
+    start, end = (float(x[i0]), float(y[i0])), (float(x[i1]), float(y[i1]))
+    travel = np.array([end[0] - start[0], end[1] - start[1]])
+    left = np.array([-travel[1], travel[0]])
+    mid = (0.5 * (start[0] + end[0]), 0.5 * (start[1] + end[1]))
+    gradient = np.array([2 * v[0] * mid[0] + v[1], 2 * v[0] * mid[1] + v[2]])
+    if float(gradient @ left) < 0:
+        v = -v
+    bins = max(1, math.ceil((spec.far_m - spec.near_m) / BIN_M))
+    covered = np.unique(np.clip(((r - spec.near_m) / BIN_M).astype(np.int64), 0, bins - 1))
+    support = min(1.0, len(covered) / bins / SUPPORT_FULL)
+    return GroundBoundary(float(v[0]), float(v[1]), float(v[2]), float(v[3]), start, end, support, len(x))
+
+
+def detect_ground_lanes(
+    white: np.ndarray, yellow: np.ndarray, grid: GroundGrid, bottom_v_px: int, spec: GroundLaneSpec,
+    priors: tuple[GroundBoundary | None, GroundBoundary | None] = (None, None),
+) -> GroundLanes:
+    """Left (yellow) and right (white, right of the yellow line, or near the prior) boundaries of the ego lane."""
+    x, y, is_yellow = ground_points(white, yellow, grid, bottom_v_px)
+    left = _beside(fit_boundary(x[is_yellow], y[is_yellow], spec, priors[0], seed=1), spec, left_side=True)
+    if left is None and priors[0] is not None:
+        left = _beside(fit_boundary(x[is_yellow], y[is_yellow], spec, None, seed=1), spec, left_side=True)
+    wx, wy = x[~is_yellow], y[~is_yellow]
+    w = spec.lane_width_m
+    if left is not None:
+        gap = -left.distance(wx, wy)  # the ego lane's white edge lies about a lane width right of the yellow line
+        keep = (gap >= 0.5 * w) & (gap <= 1.6 * w)
+        wx, wy = wx[keep], wy[keep]
+    right = _beside(fit_boundary(wx, wy, spec, priors[1], seed=2), spec, left_side=False)
+    if right is None and priors[1] is not None:  # the prior lost the line (a jump): search afresh
+        right = _beside(fit_boundary(wx, wy, spec, None, seed=3), spec, left_side=False)
+    geometry = 1.0
+    if left is not None and right is not None:
+        near = right.samples()[: max(2, int(0.25 / STEP_M))]
+        width = float(np.mean(-left.distance(near[:, 0], near[:, 1])))
+        error = abs(width - w) / w
+        lo, hi = WIDTH_TOLERANCE
+        geometry = float(min(1.0, max(0.0, (hi - error) / (hi - lo))))
+    return GroundLanes(left, right, geometry, len(x))
+
+
+BESIDE_LANES = 1.5  # [-] of the lane width: a boundary farther than this from the camera (or on its wrong side by more
+#   than half a lane) does not bound the lane the car is in: a yellow duck on the verge, the other lane's white edge
+
+
+def _beside(boundary: GroundBoundary | None, spec: GroundLaneSpec, *, left_side: bool) -> GroundBoundary | None:
+    """The boundary if the camera is on its lane side (to its right for a left boundary), within BESIDE_LANES lanes."""
+    if boundary is None:
+        return None
+    inward = -float(boundary.distance(np.zeros(1), np.zeros(1))[0]) if left_side else float(boundary.distance(np.zeros(1), np.zeros(1))[0])
+    w = spec.lane_width_m
+    return boundary if -0.5 * w <= inward <= BESIDE_LANES * w else None
+
+
+def aim_point(lanes: GroundLanes, spec: GroundLaneSpec) -> tuple[float, float] | None:
+    """The pure-pursuit point: where the lane centre — each boundary offset by half a lane toward it, the two averaged
+    when both are seen — lies ``aim_m`` from the camera (its farthest modelled point when it stays nearer)."""
+    points = []
+    for side, delta in ((lanes.left, -0.5 * spec.lane_width_m), (lanes.right, 0.5 * spec.lane_width_m)):
+        centre = side.offset(delta) if side is not None else None
+        if centre is not None:
+            points.append(_at_distance(centre.samples(EXTEND_M), spec.aim_m))
+    if not points:
+        return None
+    x, y = np.mean(points, axis=0)
+    return float(x), float(y)
+
+
+def _at_distance(curve: np.ndarray, distance_m: float) -> np.ndarray:
+    """The first point of a sampled curve that is distance_m from the camera (interpolated), else its farthest."""
+    r = np.hypot(curve[:, 0], curve[:, 1])
+    beyond = np.flatnonzero(r >= distance_m)
+    if len(beyond) == 0:
+        return curve[int(np.argmax(r))]
+    i = int(beyond[0])
+    if i == 0:
+        return curve[0]
+    t = (distance_m - r[i - 1]) / (r[i] - r[i - 1])
+    return curve[i - 1] + t * (curve[i] - curve[i - 1])
+
+
+def agreement(now: GroundBoundary | None, before: GroundBoundary | None, spec: GroundLaneSpec) -> float:
+    """1 when a boundary lies on last frame's, 0 at AGREEMENT_M of a lane width apart (mean over its near 0.3 m)."""
+    if now is None or before is None:
+        return 1.0
+    near = now.samples()[: max(2, int(0.3 / STEP_M))]
+    err = float(np.mean(np.abs(before.distance(near[:, 0], near[:, 1]))))
+    return max(0.0, 1.0 - err / (AGREEMENT_M * spec.lane_width_m))
+
+
+LOST_AFTER_S = 1.0  # [s] boundaries not seen for this long are no prior any more
+
+
+class GroundMemory:
+    """Last frame's boundaries, each kept as the prior (the gate of its points) until LOST_AFTER_S unseen."""
+
+    def __init__(self) -> None:
+        self._last: list[tuple[float, GroundBoundary] | None] = [None, None]
+
+    def priors(self, t_s: float) -> GroundLanes | None:
+        kept = [b if b is not None and t_s - b[0] <= LOST_AFTER_S else None for b in self._last]
+        return GroundLanes(kept[0][1] if kept[0] else None, kept[1][1] if kept[1] else None, 1.0, 0)
+
+    def remember(self, t_s: float, lanes: GroundLanes) -> None:
+        for i, b in enumerate((lanes.left, lanes.right)):
+            if b is not None:
+                self._last[i] = (t_s, b)
+
+
+class PassThroughGround:
+    """No memory: every frame is fitted without priors."""
+
+    def priors(self, t_s: float) -> GroundLanes | None:
+        return None
+
+    def remember(self, t_s: float, lanes: GroundLanes) -> None:
+        return None
+
+
+def ground_lanes_in_image(
+    hls: np.ndarray, mask: np.ndarray, region: RoadRegion, camera: CameraModel, spec: GroundLaneSpec,
+    priors: GroundLanes | None,
+) -> tuple[GroundLanes, tuple[LaneLine | None, LaneLine | None], tuple[float, float], np.ndarray, np.ndarray, tuple[bool, bool]] | None:
+    """The ground model on a working-size HLS image: the boundaries, each also as the image chord of its near range (what
+    occlusion, the lead search and the overlay look along), with its support; each side's agreement with its prior; the
+    marking mask and its integral over the road rows; per side, whether a missing boundary lies out of view. None when
+    the camera cannot see the fit range."""
+    cam = camera.scaled_to(region.width_px, region.height_px)
+    grid = ground_grid(cam, region.top_v_px, region.bottom_v_px, spec.far_m)
+    if grid is None:
+        return None
+    light = smoothed_light(hls)
+    white, yellow = marking_masks(hls, light, mask, region.top_v_px, region.bottom_v_px)
+    features = cv2.bitwise_or(white, yellow)
+    before = priors if priors is not None else GroundLanes(None, None, 1.0, 0)
+    lanes = detect_ground_lanes(white, yellow, grid, region.bottom_v_px, spec, (before.left, before.right))
+    band = slice(region.top_v_px, region.bottom_v_px + 1)
+    integral = cv2.integral((features[band] > 0).view(np.uint8), sdepth=cv2.CV_64F)
+    lines = tuple(_image_chord(b, cam, spec) for b in (lanes.left, lanes.right))
+    agree = (agreement(lanes.left, before.left, spec), agreement(lanes.right, before.right, spec))
+    hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid),
+              lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid))
+    return lanes, (lines[0], lines[1]), agree, features, integral, hidden
+
+
+VISIBLE_SHARE = 0.25  # [-] a boundary with less than this share of its near 0.3 m inside the road region is out of view
+
+
+def _in_view(expected: GroundBoundary | None, camera: CameraModel, grid: GroundGrid) -> bool:
+    """Would the camera see this boundary (its near 0.3 m, as the lane model places it)?"""
+    if expected is None:
+        return True  # the model cannot place it: count it as missing
+    pts = expected.samples(0.3)[: int(0.3 / STEP_M)]
+    u, v, ok = camera.project_ground(pts[:, 0], pts[:, 1])
+    inside = ok & (u >= 0) & (u < camera.width_px) & (v >= grid.top_v_px) & (v < camera.height_px)
+    return float(inside.mean()) >= VISIBLE_SHARE
+
+
+def _image_chord(boundary: GroundBoundary | None, camera: CameraModel, spec: GroundLaneSpec) -> LaneLine | None:
+    """The straight image line through the boundary's nearest point and the one 0.15 m along it (or its end)."""
+    if boundary is None:
+        return None
+    pts = boundary.samples()
+    ends = pts[[0, min(len(pts) - 1, int(0.15 / STEP_M))]]
+    u, v, ok = camera.project_ground(ends[:, 0], ends[:, 1])
+    if not ok.all() or abs(v[0] - v[1]) < 1e-6:
+        return None
+    slope = (u[0] - u[1]) / (v[0] - v[1])
+    return LaneLine(float(slope), float(u[0] - slope * v[0]), boundary.support, boundary.inliers)
