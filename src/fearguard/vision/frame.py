@@ -176,6 +176,7 @@ class Lanes:
     lane_width_px: float  # lane width at that row (measured, remembered or the default)
     ground: GroundLanes | None = None  # the ground-plane boundaries, when the lane model bends
     out_of_view: tuple[bool, bool] = (False, False)  # a missing side the lane model places outside the picture
+    expected: tuple[tuple[np.ndarray, np.ndarray], ...] | None = None  # the bending boundaries as image points (occlusion's)
 
 
 @dataclass(frozen=True)
@@ -212,13 +213,12 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
     if ground is not None:
         fit = ground_lanes_in_image(p.hls, p.mask, region, p.camera, ground, trackers.ground.priors(t_s))
         if fit is not None:
-            lanes, (left, right), (agree_l, agree_r), features, integral, hidden = fit
-            trackers.ground.remember(t_s, lanes)
+            trackers.ground.remember(t_s, fit.lanes)
             v_aim = lookahead_row(region)
-            width_px = trackers.memory.remember_width(left, right, v_aim, region.width_px)
-            return Lanes(left=left, right=right, seen_left=left, seen_right=right, agreement_left=agree_l, agreement_right=agree_r,
-                         features=features, paint_integral=integral, aim_row_px=v_aim, lane_width_px=width_px, ground=lanes,
-                         out_of_view=hidden)
+            width_px = trackers.memory.remember_width(fit.left, fit.right, v_aim, region.width_px)
+            return Lanes(left=fit.left, right=fit.right, seen_left=fit.left, seen_right=fit.right, agreement_left=fit.agreement[0],
+                         agreement_right=fit.agreement[1], features=fit.features, paint_integral=fit.paint_integral, aim_row_px=v_aim,
+                         lane_width_px=width_px, ground=fit.lanes, out_of_view=fit.out_of_view, expected=fit.expected)
     det = detect_lanes(p.hls, region, p.mask, trackers.lanes.current(region))
     v_aim = lookahead_row(region)
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
@@ -252,7 +252,7 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     surface = surface_maps(p.gray, p.hls, lanes.features, p.region, lanes.paint_integral)
     measured = road_appearance(p.gray, p.hls, p.region, expected_l, expected_r, surface)
     road = trackers.road.reference(measured)
-    occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface)
+    occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface, curves=lanes.expected)
     trackers.road.learn(measured, occ)
     obstacle = None
     if p.camera.mount_height_m is not None:  # a range needs the mounting height; without it the search is skipped
@@ -278,11 +278,11 @@ def steer(p: Prepared, lanes: Lanes, trackers: Trackers, ground: GroundLaneSpec 
     """Bearing of the lane centre at the look-ahead row (the ground model's: its aim point); no boundary: the held
     angle (None without history)."""
     if lanes.ground is not None and ground is not None:
-        aim = aim_point(lanes.ground, ground)
+        aim = aim_point(lanes.ground, ground)  # on a tight curve it may lie beyond the picture's edge: the model bends there
         if aim is None:
             return trackers.memory.hold(None)
-        edge = math.degrees(math.atan2(p.camera.width_px / 2.0, p.camera.fx_px))  # pure pursuit saturates at the picture's edge
-        return trackers.memory.hold(max(-edge, min(edge, math.degrees(math.atan2(aim[1], aim[0])))))
+        limit = ground.max_bearing_deg
+        return trackers.memory.hold(max(-limit, min(limit, math.degrees(math.atan2(aim[1], aim[0])))))
     u_aim = aim_point_u(lanes.left, lanes.right, lanes.aim_row_px, lanes.lane_width_px)
     return trackers.memory.hold(steering_from_aim(u_aim, p.scale, p.camera) if u_aim is not None else None)
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from fearguard.camera import CameraModel
 from fearguard.vision.lanes import LaneLine, RoadRegion, smoothed_light
+from fearguard.vision.occlusion import ROW_STEP
 
 HYPOTHESES = 48  # [-] RANSAC hypotheses per side (deterministic: a fixed-seed generator)
 INLIER_M = 0.02  # [m] a point this close to a boundary curve lies on it (tape is 2-5 cm wide)
@@ -47,7 +48,10 @@ RIDGE_RATIO = 0.6  # [-] ... and by this share of the road's lightness (tape on 
 RIDGE_WINDOW = (0.12, 0.35)  # [-] of the width: far and near top-hat windows, in rows and in columns
 MAX_CURVATURE = 8.0  # [1/m] a boundary bending tighter (radius < 12.5 cm) is no road edge a car can follow
 STRAIGHT = 1e-6  # [1/m] |a| below this (radius beyond 500 km) is a straight line
+NEAR_WEIGHT_FAR = 0.3  # [-] an inlier at the far end of the fit range counts this much of a near one (full weight up to aim_m):
+#   the lane the car is in is nearest; far markings may belong to the road after the curve or beyond it
 EXTEND_M = 0.3  # [m] the model is followed this far beyond the last marking seen (the aim point may lie there)
+EXPECT_BEYOND_M = 0.1  # [m] occlusion expects a boundary this far beyond the last marking seen on it
 STEP_M = 0.01  # [m] spacing of the points sampled along a boundary
 
 
@@ -59,6 +63,7 @@ class GroundLaneSpec:
     near_m: float = 0.07  # fit range, from the camera's foot: the nearest ground the camera sees ...
     far_m: float = 0.5  # ... and the farthest where the projection is still precise
     aim_m: float = 0.25  # distance from the camera of the steering's pure-pursuit point on the lane centre
+    max_bearing_deg: float = 75.0  # the aim's bearing is held within this: a lane centre further round at aim_m is no lane
 
 
 @dataclass(frozen=True)
@@ -70,7 +75,7 @@ class GroundBoundary:
     b: float
     c: float
     d: float
-    start: tuple[float, float]  # the inlier nearest the camera
+    start: tuple[float, float]  # the inlier nearest ahead (smallest x)
     end: tuple[float, float]  # the inlier farthest along the boundary from it
     support: float  # [0..1] share of the near range's bins with inliers, saturating at SUPPORT_FULL
     inliers: int
@@ -271,7 +276,8 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
     curves = curves[np.isfinite(curves).all(axis=1) & (2.0 * np.abs(curves[:, 0]) <= MAX_CURVATURE)]
     if len(curves) == 0:
         return None
-    counts = (np.abs(_distance(curves, x, y)) <= INLIER_M).sum(axis=1)
+    weight = np.clip((spec.far_m - r) / (spec.far_m - spec.aim_m), NEAR_WEIGHT_FAR, 1.0)  # near markings count more
+    counts = (np.abs(_distance(curves, x, y)) <= INLIER_M) @ weight
     best = curves[int(np.argmax(counts))]
     inlier = np.abs(_distance(best, x, y)) <= INLIER_M
     if inlier.sum() < MIN_POINTS:
@@ -279,7 +285,7 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
     refit = _refit(x[inlier], y[inlier])
     if refit is not None and 2.0 * abs(refit[0]) <= MAX_CURVATURE:
         refined = np.abs(_distance(refit, x, y)) <= INLIER_M
-        if refined.sum() >= inlier.sum():
+        if refined @ weight >= inlier @ weight:
             best, inlier = refit, refined
     return _oriented(best, x[inlier], y[inlier], spec)
 
@@ -287,8 +293,8 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
 def _oriented(v: np.ndarray, x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec) -> GroundBoundary:
     """The boundary with its ends, its support, and its sign chosen so that + is left of the way away from the camera."""
     r = np.hypot(x, y)
-    i0 = int(np.argmin(r))
-    i1 = int(np.argmax(np.hypot(x - x[i0], y - y[i0])))
+    i0 = int(np.argmin(x))  # the nearest ahead: a boundary runs away from the car (its nearest point by distance may
+    i1 = int(np.argmax(np.hypot(x - x[i0], y - y[i0])))  # lie mid-arc, where a curve passes beside the camera)
     start, end = (float(x[i0]), float(y[i0])), (float(x[i1]), float(y[i1]))
     travel = np.array([end[0] - start[0], end[1] - start[1]])
     left = np.array([-travel[1], travel[0]])
@@ -408,14 +414,24 @@ class PassThroughGround:
         return None
 
 
+@dataclass(frozen=True)
+class GroundFit:
+    """The ground model's result for the rest of the frame analysis, in working pixels."""
+
+    lanes: GroundLanes
+    left: LaneLine | None  # each boundary's image chord over its near 0.15 m (the lead search, the overlay, the width memory)
+    right: LaneLine | None
+    agreement: tuple[float, float]  # each side's agreement with its prior
+    features: np.ndarray  # the marking mask (white | yellow)
+    paint_integral: np.ndarray  # its integral over the road rows
+    out_of_view: tuple[bool, bool]  # a missing side that the model places outside the picture
+    expected: tuple[tuple[np.ndarray, np.ndarray], ...]  # where the boundaries should show: (rows, columns) per side
+
+
 def ground_lanes_in_image(
-    hls: np.ndarray, mask: np.ndarray, region: RoadRegion, camera: CameraModel, spec: GroundLaneSpec,
-    priors: GroundLanes | None,
-) -> tuple[GroundLanes, tuple[LaneLine | None, LaneLine | None], tuple[float, float], np.ndarray, np.ndarray, tuple[bool, bool]] | None:
-    """The ground model on a working-size HLS image: the boundaries, each also as the image chord of its near range (what
-    occlusion, the lead search and the overlay look along), with its support; each side's agreement with its prior; the
-    marking mask and its integral over the road rows; per side, whether a missing boundary lies out of view. None when
-    the camera cannot see the fit range."""
+    hls: np.ndarray, mask: np.ndarray, region: RoadRegion, camera: CameraModel, spec: GroundLaneSpec, priors: GroundLanes | None,
+) -> GroundFit | None:
+    """The ground model on a working-size HLS image. None when the camera cannot see the fit range."""
     cam = camera.scaled_to(region.width_px, region.height_px)
     grid = ground_grid(cam, region.top_v_px, region.bottom_v_px, spec.far_m)
     if grid is None:
@@ -427,11 +443,33 @@ def ground_lanes_in_image(
     lanes = detect_ground_lanes(white, yellow, grid, region.bottom_v_px, spec, (before.left, before.right))
     band = slice(region.top_v_px, region.bottom_v_px + 1)
     integral = cv2.integral((features[band] > 0).view(np.uint8), sdepth=cv2.CV_64F)
-    lines = tuple(_image_chord(b, cam, spec) for b in (lanes.left, lanes.right))
+    left, right = (_image_chord(b, cam) for b in (lanes.left, lanes.right))
     agree = (agreement(lanes.left, before.left, spec), agreement(lanes.right, before.right, spec))
     hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid),
               lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid))
-    return lanes, (lines[0], lines[1]), agree, features, integral, hidden
+    return GroundFit(lanes, left, right, agree, features, integral, hidden, expected_points(lanes, cam, region, spec))
+
+
+def expected_points(
+    lanes: GroundLanes, camera: CameraModel, region: RoadRegion, spec: GroundLaneSpec,
+) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+    """Image points (rows on the occlusion grid, columns) where each boundary should show — the fitted curve over the
+    span its markings were seen on and a little beyond (EXPECT_BEYOND_M: the model's extrapolation is a guess, not an
+    expectation), or for a missing side the seen one a lane width over — inside the fit range and the road region."""
+    out = []
+    w = spec.lane_width_m
+    for side, other, delta in ((lanes.left, lanes.right, w), (lanes.right, lanes.left, -w)):
+        curve = side if side is not None else (other.offset(delta) if other is not None else None)
+        if curve is None:
+            continue
+        pts = curve.samples(EXPECT_BEYOND_M)
+        pts = pts[np.hypot(pts[:, 0], pts[:, 1]) <= spec.far_m]
+        u, v, ok = camera.project_ground(pts[:, 0], pts[:, 1])
+        keep = ok & (u >= 0) & (u < region.width_px) & (v >= region.top_v_px) & (v <= region.bottom_v_px)
+        last = region.top_v_px + ((region.bottom_v_px - region.top_v_px) // ROW_STEP) * ROW_STEP
+        rows = np.minimum(region.top_v_px + ROW_STEP * np.rint((v[keep] - region.top_v_px) / ROW_STEP), last)
+        out.append((rows.astype(np.int64), np.rint(u[keep]).astype(np.int64)))
+    return tuple(out)
 
 
 VISIBLE_SHARE = 0.25  # [-] a boundary with less than this share of its near 0.3 m inside the road region is out of view
@@ -447,7 +485,7 @@ def _in_view(expected: GroundBoundary | None, camera: CameraModel, grid: GroundG
     return float(inside.mean()) >= VISIBLE_SHARE
 
 
-def _image_chord(boundary: GroundBoundary | None, camera: CameraModel, spec: GroundLaneSpec) -> LaneLine | None:
+def _image_chord(boundary: GroundBoundary | None, camera: CameraModel) -> LaneLine | None:
     """The straight image line through the boundary's nearest point and the one 0.15 m along it (or its end)."""
     if boundary is None:
         return None

@@ -198,15 +198,25 @@ def hidden_samples(
     boxes: tuple[tuple[int, int, int, int], ...] = (),
 ) -> tuple[int, int]:
     """(hidden, total) samples along one expected boundary (vectorised over rows); row_ref: row_references on sample_rows."""
-    half = max(2, int(BAND * region.width_px))
     rows = sample_rows(region)
     centre = np.rint(line.u_at(rows.astype(float))).astype(np.int64) if len(rows) else rows
+    return hidden_at(maps, region, rows, centre, road, row_ref, boxes)
+
+
+def hidden_at(
+    maps: SurfaceMaps, region: RoadRegion, rows: np.ndarray, centre: np.ndarray, road: RoadAppearance,
+    row_ref: tuple[np.ndarray, np.ndarray], boxes: tuple[tuple[int, int, int, int], ...] = (),
+) -> tuple[int, int]:
+    """(hidden, total) of expected marking points (rows on the sample_rows grid, columns ``centre``; a bending lane's
+    boundary may cross a row more than once, or not at all)."""
+    half = max(2, int(BAND * region.width_px))
     lo, hi = clamp(centre - half, 0, region.width_px), clamp(centre + half + 1, 0, region.width_px)
     seen = hi > lo  # rows where the band is in the image at all
     if not seen.any():
         return 0, 0
     rows, centre, lo, hi = rows[seen], centre[seen], lo[seen], hi[seen]
-    row_grey, row_uniform = row_ref[0][seen], row_ref[1][seen]
+    k = (rows - region.top_v_px) // ROW_STEP  # the sample row of each point
+    row_grey, row_uniform = row_ref[0][k], row_ref[1][k]
     r = rows - maps.top_v_px
     u = clamp(centre, 0, region.width_px - 1)  # a band running off the image is judged at its edge pixel
     pi = maps.paint_integral
@@ -232,16 +242,21 @@ def hidden_samples(
 def occlusion(
     gray: np.ndarray, hls: np.ndarray, features: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine,
     road: RoadAppearance | float, boxes: tuple[tuple[int, int, int, int], ...] = (), maps: SurfaceMaps | None = None,
+    curves: tuple[tuple[np.ndarray, np.ndarray], ...] | None = None,
 ) -> float:
     """Occlusion 0..1 over both expected boundaries (1 when no boundary is in view at all). road: the road's
     appearance (``road_appearance`` or ``RoadModel``); a bare grey level (the road reference) is accepted too.
-    maps: this frame's ``surface_maps`` (computed here when not given)."""
+    maps: this frame's ``surface_maps`` (computed here when not given). curves: the expected boundaries as image
+    points (rows, columns) when the lane model bends (``ground_lanes.expected_points``); the lines then only say
+    where the road lies across each row."""
     maps = maps if maps is not None else surface_maps(gray, hls, features, region)
     if not isinstance(road, RoadAppearance):
         measured = road_appearance(gray, hls, region, left, right, maps)
         road = replace(measured, grey=float(road)) if math.isfinite(road) else measured
     row_ref = row_references(gray, region, sample_rows(region), (left, right))  # the same rows for both boundaries
-    h_l, n_l = hidden_samples(maps, region, left, road, row_ref, boxes)
-    h_r, n_r = hidden_samples(maps, region, right, road, row_ref, boxes)
-    n = n_l + n_r
-    return float((h_l + h_r) / n) if n else 1.0
+    if curves is not None:
+        counts = [hidden_at(maps, region, rows, cols, road, row_ref, boxes) for rows, cols in curves]
+    else:
+        counts = [hidden_samples(maps, region, line, road, row_ref, boxes) for line in (left, right)]
+    n = sum(c[1] for c in counts)
+    return float(sum(c[0] for c in counts) / n) if n else 1.0

@@ -44,6 +44,10 @@ AIM_M = 0.25  # [m] from the camera: the lane-centre point the steering heads fo
 #   ahead too). The tightest lane centre (a left curve's, radius ≈ 0.21 m: the expert's curvature there is 4.8/m) is
 #   then ≈ 37° off the heading, inside the camera's ±45° view; 0.29 m (the image model's look-ahead) asks for 43°+
 
+MAX_BEARING_DEG = 75.0  # [deg] the steering (aim-point bearing) limit. The tightest lane centre (a right curve's, radius
+#   0.175 m) puts the aim AIM_M from the camera ~70° off the heading: pure pursuit then asks for curvature 5.7/m, which
+#   the camera's ±45.7° edge (at most 4.0/m) cannot give
+
 # -- body and lane (Duckietown appearance specification; tile 0.585 m) -------------------------
 WHEEL_OUTER_HALF_TRACK_M = 0.065  # [m] centre line of the robot to the outer face of a wheel (13 cm wide)
 ROBOT_FRONT_M = CAMERA_AHEAD_M  # [m] axle to the front bumper (the simulator's box ends at the camera)
@@ -63,7 +67,7 @@ def duckiebot_camera(width_px: int = DEFAULT_FRAME_PX[0], height_px: int = DEFAU
 def duckietown_lane() -> GroundLaneSpec:
     """The Duckietown road for the ground-plane lane model: 0.236 m between the inner edges of the yellow line and the
     white tape, fitted over the near 0.07-0.5 m, aiming AIM_M ahead."""
-    return GroundLaneSpec(lane_width_m=WHITE_INNER_M - YELLOW_INNER_M, near_m=0.07, far_m=0.5, aim_m=AIM_M)
+    return GroundLaneSpec(lane_width_m=WHITE_INNER_M - YELLOW_INNER_M, near_m=0.07, far_m=0.5, aim_m=AIM_M, max_bearing_deg=MAX_BEARING_DEG)
 
 
 def duckiebot_limits(*, time_of_flight: bool = False) -> VehicleLimits:
@@ -71,12 +75,12 @@ def duckiebot_limits(*, time_of_flight: bool = False) -> VehicleLimits:
 
     Braking: the speed decays with τ = 0.2 s after the 0.15 s delay, so a stop takes v·(0.15 + 0.2) m;
     planning with a 0.35 s reaction and 0.5 m/s² (v·0.35 + v²) covers it at every speed. The steering
-    limit is the camera's half field of view: a bearing outside it cannot come from the picture.
+    limit is MAX_BEARING_DEG: the ground-plane lane model places its aim point beyond the picture's edge
+    (±45.7°) on tight curves; further round than that, the aim would lie beside the axle: no lane does that.
     """
-    half_hfov = math.degrees(math.atan((DEFAULT_FRAME_PX[0] / 2.0) / duckiebot_camera().fx_px))
     return VehicleLimits(
         max_speed_mps=0.5, max_decel_mps2=0.5, reaction_time_s=ACTUATION_DELAY_S + SPEED_TIME_CONSTANT_S, stop_margin_m=0.05,
-        max_steering_deg=round(half_hfov, 1), has_ultrasonic=time_of_flight, has_qr_localisation=False,
+        max_steering_deg=MAX_BEARING_DEG, has_ultrasonic=time_of_flight, has_qr_localisation=False,
         ultrasonic_min_range_m=TOF_MIN_RANGE_M, ultrasonic_max_range_m=TOF_MAX_RANGE_M,
     )
 
