@@ -48,7 +48,7 @@ RIDGE_RATIO = 0.6  # [-] ... and by this share of the road's lightness (tape on 
 RIDGE_WINDOW = (0.12, 0.35)  # [-] of the width: far and near top-hat windows, in rows and in columns
 MAX_CURVATURE = 8.0  # [1/m] a boundary bending tighter (radius < 12.5 cm) is no road edge a car can follow
 STRAIGHT = 1e-6  # [1/m] |a| below this (radius beyond 500 km) is a straight line
-NEAR_WEIGHT_FAR = 0.3  # [-] an inlier at the far end of the fit range counts this much of a near one (full weight up to aim_m):
+NEAR_WEIGHT_FAR = 0.1  # [-] an inlier at the far end of the fit range counts this much of a near one (full weight up to aim_m):
 #   the lane the car is in is nearest; far markings may belong to the road after the curve or beyond it
 EXTEND_M = 0.3  # [m] the model is followed this far beyond the last marking seen (the aim point may lie there)
 EXPECT_BEYOND_M = 0.1  # [m] occlusion expects a boundary this far beyond the last marking seen on it
