@@ -14,11 +14,21 @@ import fearguard as fg
 
 def test_public_names_are_exported_explicitly() -> None:
     expected = {"CUE_NAMES", "CameraModel", "Cause", "Command", "Cues", "FearGuard", "FearLevel", "FearResult",
-                "FearguardError", "FrameAnalysis", "FrameSteering", "HoughLaneSteering", "Lead", "LeadBox", "Mode", "Observation",
+                "FearguardError", "FrameAnalysis", "FrameSteering", "GroundLaneSpec", "HoughLaneSteering", "Lead", "LeadBox",
+                "Mode", "Observation",
                 "PolicyConfig", "RuleBase", "RuleError", "Strategy", "VehicleLimits", "analyze_frame", "load_camera",
                 "load_rules", "save_camera"}
     assert set(fg.__all__) == expected
     assert all(hasattr(fg, name) for name in fg.__all__)
+
+
+def test_the_bending_lane_model_is_a_keyword_only_addition() -> None:
+    """Added after the contract: the ground-plane lane model is asked for by keyword, the positional signatures stay."""
+    for call in (fg.HoughLaneSteering, fg.vision.frame.FramePipeline):
+        ground = inspect.signature(call).parameters["ground"]
+        assert ground.kind is inspect.Parameter.KEYWORD_ONLY and ground.default is None
+    spec = fg.GroundLaneSpec(lane_width_m=0.236)
+    assert (spec.near_m, spec.far_m, spec.aim_m, spec.max_bearing_deg) == (0.07, 0.5, 0.25, 75.0)
 
 
 def test_values_moved_to_observation_keep_their_old_import_paths() -> None:

@@ -51,6 +51,7 @@ _HOME = {  # public name → the module that defines it
     "FearGuard": "fearguard.supervisor",
     "VehicleLimits": "fearguard.vehicle",
     "FrameAnalysis": "fearguard.vision.frame",
+    "GroundLaneSpec": "fearguard.vision.ground_lanes",
     "analyze_frame": "fearguard.vision.frame",
     "HoughLaneSteering": "fearguard.vision.lane_steering",
 }
@@ -68,6 +69,7 @@ __all__ = [
     "FearguardError",
     "FrameAnalysis",
     "FrameSteering",
+    "GroundLaneSpec",
     "HoughLaneSteering",
     "Lead",
     "LeadBox",

@@ -185,14 +185,14 @@ class FearGuard:
         lead = obs.lead if isinstance(obs.lead, Lead) else None
         if isinstance(obs.cues, Cues):
             values = obs.cues.values()
-        else:
+            if not self.vehicle.has_ultrasonic:
+                values[OBSTACLE_RANGE] = math.inf  # no sensor: nothing known in range, declared not faked
+            if not self.vehicle.has_qr_localisation:
+                values[QR_STALENESS] = 0.0  # no QR localisation on this car: the cue does not apply
+        else:  # perception owns absent sensors: no range sensor is the camera's ground-plane range of an object, or inf
             perceived = self.perception.perceive(obs)
             values, lead = perceived.cues.values(), perceived.lead
             notes.extend(perceived.alerts)
-        if not self.vehicle.has_ultrasonic:
-            values[OBSTACLE_RANGE] = math.inf  # no sensor: nothing known in range, declared not faked
-        if not self.vehicle.has_qr_localisation:
-            values[QR_STALENESS] = 0.0  # no QR localisation on this car: the cue does not apply
         for name, v in zip(CUE_NAMES, values, strict=True):
             if not isinstance(v, float) or math.isnan(v):
                 notes.append(f"{name} unknown: counted as its worst value")

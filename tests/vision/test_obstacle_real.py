@@ -54,3 +54,29 @@ def test_objects_of_any_colour_get_the_ground_plane_range_of_their_lowest_row(st
 def test_without_mounting_height_there_is_no_range_and_no_search(stills):
     img = stills["solidWhiteRight.jpg"]
     assert fg.analyze_frame(with_box(img, (0.45, 0.8, 0.55, 0.88), (0, 140, 255))).obstacle is None
+
+
+def test_a_car_without_a_range_sensor_brakes_for_what_its_camera_sees(stills):
+    """The camera's ground-plane range of an object in the lane reaches the obstacle cue (it used to be overwritten
+    with "nothing in range" by the supervisor), once the object has been seen on consecutive frames."""
+    import numpy as np
+
+    img = stills["solidWhiteRight.jpg"]
+    cam = _camera(img)
+    car = fg.VehicleLimits(has_ultrasonic=False, has_qr_localisation=False)
+    rng = np.random.default_rng(0)
+
+    def frames(picture):
+        for _ in range(6):  # fresh sensor noise each frame: a camera, not a frozen picture
+            yield np.clip(picture.astype(np.int16) + rng.integers(-2, 3, picture.shape), 0, 255).astype(np.uint8)
+
+    clear = fg.FearGuard(fg.HoughLaneSteering(cam), vehicle=car, camera=cam)
+    cmds = [clear.step(fg.Observation(t_s=0.05 * k, speed_mps=1.0, frame=f)) for k, f in enumerate(frames(img))]
+    assert all(c.cues.obstacle_range_m == float("inf") for c in cmds)
+    boxed = fg.FearGuard(fg.HoughLaneSteering(cam), vehicle=car, camera=cam)
+    with_cone = with_box(img, (0.45, 0.80, 0.55, 0.88), (0, 140, 255))
+    cmds = [boxed.step(fg.Observation(t_s=0.05 * k, speed_mps=1.0, frame=f)) for k, f in enumerate(frames(with_cone))]
+    assert cmds[0].cues.obstacle_range_m == float("inf")  # one frame is no object yet
+    last = cmds[-1]
+    assert last.cues.obstacle_range_m == pytest.approx(cam.ground_range_m(0.88 * img.shape[0]), rel=0.25)
+    assert any("camera: object in the lane" in f for f in last.perceived.facts)

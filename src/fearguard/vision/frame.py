@@ -255,8 +255,11 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface, curves=lanes.expected)
     trackers.road.learn(measured, occ)
     obstacle = None
-    if p.camera.mount_height_m is not None:  # a range needs the mounting height; without it the search is skipped
+    # a range needs the mounting height (without it the search is skipped). With the bending lane model the search is
+    # off: between its boundaries on Duckietown's curves it found the mat and the verge foreign (false stops every lap)
+    if p.camera.mount_height_m is not None and lanes.ground is None:
         obstacle = detect_obstacle(surface, road, p.region, expected_l, expected_r, p.camera, p.scale)
+    obstacle = trackers.obstacles.update(obstacle)
     lead = lead_from_box(box, p.camera) if box is not None else None
     return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference, obstacle=obstacle)
 

@@ -48,6 +48,7 @@ RIDGE_RATIO = 0.6  # [-] ... and by this share of the road's lightness (tape on 
 RIDGE_WINDOW = (0.12, 0.35)  # [-] of the width: far and near top-hat windows, in rows and in columns
 MAX_CURVATURE = 8.0  # [1/m] a boundary bending tighter (radius < 12.5 cm) is no road edge a car can follow
 STRAIGHT = 1e-6  # [1/m] |a| below this (radius beyond 500 km) is a straight line
+REFIT_KEEP = 0.9  # [-] share of the hypothesis' (weighted) inliers the least-squares refit must keep to replace it
 NEAR_WEIGHT_FAR = 0.1  # [-] an inlier at the far end of the fit range counts this much of a near one (full weight up to aim_m):
 #   the lane the car is in is nearest; far markings may belong to the road after the curve or beyond it
 EXTEND_M = 0.3  # [m] the model is followed this far beyond the last marking seen (the aim point may lie there)
@@ -238,14 +239,22 @@ def _normalised(v: np.ndarray) -> np.ndarray:
         return v / np.sqrt(np.where(s > 1e-18, s, np.nan))[:, None]
 
 
+_PRATT_INV = np.linalg.inv(np.array([[0.0, 0, 0, -2], [0, 1, 0, 0], [0, 0, 1, 0], [-2, 0, 0, 0]]))  # Pratt's constraint b²+c²−4ad
+
+
 def _refit(x: np.ndarray, y: np.ndarray) -> np.ndarray | None:
-    """Least-squares circle or line through the points: the smallest singular vector of [x²+y², x, y, 1] on the
-    centred and scaled points (conditioning), mapped back and normalised."""
+    """Least-squares circle or line through the points: Pratt's fit (the algebraic residual under b² + c² − 4ad = 1,
+    nearly unbiased on short arcs where the plain algebraic fit bends lines), on the centred and scaled points."""
     mx, my = float(x.mean()), float(y.mean())
     scale = float(np.sqrt(np.mean((x - mx) ** 2 + (y - my) ** 2))) or 1.0
     qx, qy = (x - mx) / scale, (y - my) / scale
     m = np.stack([qx * qx + qy * qy, qx, qy, np.ones_like(qx)], axis=1)
-    a_, b_, c_, d_ = np.linalg.svd(m, full_matrices=False)[2][-1]
+    values, vectors = np.linalg.eig(_PRATT_INV @ (m.T @ m))
+    values, vectors = values.real, vectors.real
+    usable = np.flatnonzero(values >= -1e-9)
+    if len(usable) == 0:
+        return None
+    a_, b_, c_, d_ = vectors[:, usable[np.argmin(values[usable])]]
     a = a_ / scale**2
     b = -2.0 * a * mx + b_ / scale
     c = -2.0 * a * my + c_ / scale
@@ -282,10 +291,12 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
     inlier = np.abs(_distance(best, x, y)) <= INLIER_M
     if inlier.sum() < MIN_POINTS:
         return None
+    # the least-squares refit on the inliers is the boundary (a 3-point hypothesis carries the noise of its points),
+    # unless it loses the consensus the hypothesis found
     refit = _refit(x[inlier], y[inlier])
     if refit is not None and 2.0 * abs(refit[0]) <= MAX_CURVATURE:
         refined = np.abs(_distance(refit, x, y)) <= INLIER_M
-        if refined @ weight >= inlier @ weight:
+        if refined @ weight >= REFIT_KEEP * (inlier @ weight):
             best, inlier = refit, refined
     return _oriented(best, x[inlier], y[inlier], spec)
 

@@ -36,6 +36,9 @@ MIN_SHARE = 0.2  # [-] of the interior width: foreign pixels on a row that make 
 MIN_PX = 3  # [px] ... and at least this many
 SHADE_SAT_GATE = 0.6  # [-] of the road's grey: darker patches are not judged by their saturation
 MIN_ROWS = 4  # [rows] consecutive object rows that make an object (one row is noise)
+CONFIRM_FRAMES = 3  # [frames] over time an object counts once seen this many frames in a row (0.1 s at 30 Hz): a single
+#   frame's foreign patch — a tile seam beside a boundary the lane model placed a little off — is no object
+CONFIRM_AGREE = 0.25  # [-] ... each sighting's range within this share of the one before (the same object, approaching)
 
 
 @dataclass(frozen=True)
@@ -97,3 +100,19 @@ def _lowest_stretch_end(hit: np.ndarray, min_rows: int) -> int | None:
     first, after = np.flatnonzero(change == 1), np.flatnonzero(change == -1)  # each stretch's first row, one past its last
     long = after[after - first >= min_rows]
     return int(long[-1]) - 1 if len(long) else None
+
+
+class ObstacleTrack:
+    """An object in the lane is believed once CONFIRM_FRAMES consecutive frames saw it at consistent ranges."""
+
+    def __init__(self) -> None:
+        self._last: Obstacle | None = None
+        self._run = 0
+
+    def update(self, seen: Obstacle | None) -> Obstacle | None:
+        last = self._last
+        same = seen is not None and last is not None and (
+            seen.range_m is None or last.range_m is None or abs(seen.range_m - last.range_m) <= CONFIRM_AGREE * last.range_m)
+        self._run = 0 if seen is None else (self._run + 1 if same else 1)
+        self._last = seen
+        return seen if self._run >= CONFIRM_FRAMES else None

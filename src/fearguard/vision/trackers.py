@@ -21,6 +21,7 @@ from fearguard.vision.ground_lanes import GroundLanes, GroundMemory, PassThrough
 from fearguard.vision.lane_tracker import LaneTracker, TrackedLanes
 from fearguard.vision.lanes import LaneLine, RoadRegion
 from fearguard.vision.lead import LeadTracker
+from fearguard.vision.obstacle import Obstacle, ObstacleTrack
 from fearguard.vision.occlusion import RoadAppearance, RoadModel
 from fearguard.vision.steering import DEFAULT_LANE_WIDTH, LaneMemory
 
@@ -41,6 +42,17 @@ class SteeringMemory(Protocol):
     def remember_width(self, left: LaneLine | None, right: LaneLine | None, v_px: float, width_px: int) -> float: ...
 
     def hold(self, steering_deg: float | None) -> float | None: ...
+
+
+class ObstacleTracking(Protocol):
+    def update(self, seen: Obstacle | None) -> Obstacle | None: ...
+
+
+class PassThroughObstacle:
+    """No confirmation over time: this frame's object (or None) as it is."""
+
+    def update(self, seen: Obstacle | None) -> Obstacle | None:
+        return seen
 
 
 class GroundTracking(Protocol):
@@ -125,17 +137,18 @@ class Trackers:
     confidence: ConfidenceSmoothing
     road: RoadMemory  # the road's appearance over recent frames (occlusion's reference)
     ground: GroundTracking  # the bending lane's last boundaries (the ground model's priors)
+    obstacles: ObstacleTracking  # an object in the lane, confirmed over consecutive frames
 
     @classmethod
     def tracking(cls) -> Trackers:
         """The stateful form's: Kalman tracks, lane memory, confidence median."""
         return cls(lanes=LaneTracker(), leads=LeadTracker(), memory=LaneMemory(), confidence=ConfidenceMedian(), road=RoadModel(),
-                   ground=GroundMemory())
+                   ground=GroundMemory(), obstacles=ObstacleTrack())
 
     @classmethod
     def pass_through(cls) -> Trackers:
         """The stateless form's: every stand-in hands this frame's measurement back and remembers nothing."""
         return cls(
             lanes=PassThroughLanes(), leads=PassThroughLead(), memory=PassThroughMemory(), confidence=PassThroughConfidence(),
-            road=PassThroughRoad(), ground=PassThroughGround(),
+            road=PassThroughRoad(), ground=PassThroughGround(), obstacles=PassThroughObstacle(),
         )

@@ -1,0 +1,175 @@
+"""The bending lane model (vision/ground_lanes.py): its geometry, its fit, and what a pipeline with it sees.
+
+The closed-loop proof is in a world nobody here drew (tests/worlds/duckietown); these tests pin the pieces: the
+unified circle/line distance, parallel offsets, the robust fit, and frames of a flat taped floor seen through a
+Duckiebot-like camera (projected pixel by pixel from the ground plane, so the expected answers are exact).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fearguard.camera import CameraModel
+from fearguard.vision import ground_lanes as gl
+from fearguard.vision.frame import FramePipeline
+
+LANE = gl.GroundLaneSpec(lane_width_m=0.236, near_m=0.07, far_m=0.5, aim_m=0.25)
+W, H = 320, 240
+F = (H / 2) / math.tan(math.radians(37.5))
+CAMERA = CameraModel(W, H, F, F, W / 2, H / 2, (), 0.108, 19.15)  # the Duckiebot's: 75° vertical FOV, 0.108 m up, 19° down
+
+
+def _circle(cx: float, cy: float, r: float) -> np.ndarray:
+    """(a, b, c, d) of the circle, normalised (b² + c² − 4ad = 1), + outside."""
+    a = 1.0 / (2 * r)
+    return np.array([a, -2 * a * cx, -2 * a * cy, a * (cx * cx + cy * cy - r * r)])
+
+
+def _boundary(v: np.ndarray) -> gl.GroundBoundary:
+    return gl.GroundBoundary(*map(float, v), start=(0.1, 0.0), end=(0.4, 0.0), support=1.0, inliers=100)
+
+
+POINTS = st.lists(st.tuples(st.floats(-3, 3), st.floats(-3, 3)), min_size=1, max_size=20)
+
+
+@given(st.floats(-2, 2), st.floats(-2, 2), st.floats(0.05, 5), POINTS)
+def test_distance_is_the_euclidean_distance_to_a_circle(cx: float, cy: float, r: float, points: list[tuple[float, float]]) -> None:
+    x, y = np.array(points).T
+    got = _boundary(_circle(cx, cy, r)).distance(x, y)
+    assert got == pytest.approx(np.hypot(x - cx, y - cy) - r, abs=1e-6)  # at the very centre a square root of ~0: 1 µm
+
+
+@given(st.floats(0, 2 * math.pi), st.floats(-2, 2), POINTS)
+def test_distance_to_a_line_is_signed_by_its_normal(angle: float, d: float, points: list[tuple[float, float]]) -> None:
+    nx, ny = math.cos(angle), math.sin(angle)
+    x, y = np.array(points).T
+    got = _boundary(np.array([0.0, nx, ny, d])).distance(x, y)
+    assert got == pytest.approx(nx * x + ny * y + d, abs=1e-12)
+
+
+@given(st.floats(0.3, 5), st.floats(-0.2, 0.2), st.floats(0, 2 * math.pi))
+def test_an_offset_curve_is_parallel(r: float, delta: float, angle: float) -> None:
+    """Every point of the offset curve lies delta from the original (the lane centre beside a boundary, on any bend)."""
+    b = _boundary(_circle(0.0, r, r))
+    moved = b.offset(delta)
+    assert moved is not None
+    cx, cy = 0.0, r
+    rr = r + delta  # + outside for this orientation
+    p = np.array([cx + rr * math.cos(angle)]), np.array([cy + rr * math.sin(angle)])
+    assert moved.distance(*p)[0] == pytest.approx(0.0, abs=1e-9)
+    assert b.distance(*p)[0] == pytest.approx(delta, abs=1e-9)
+
+
+def test_an_offset_through_the_centre_is_refused() -> None:
+    assert _boundary(_circle(0.0, 0.1, 0.1)).offset(-0.2) is None
+
+
+@pytest.mark.parametrize("radius", [0.25, 0.6, math.inf])
+def test_the_fit_recovers_an_arc_or_a_line_among_outliers(radius: float) -> None:
+    rng = np.random.default_rng(5)
+    s = rng.uniform(0.0, 0.45, 300)  # arc length along a boundary 0.1 m left of the camera, bending left
+    if math.isinf(radius):
+        x, y = 0.05 + s, np.full_like(s, 0.1)
+    else:
+        theta = s / radius
+        x, y = 0.05 + radius * np.sin(theta), 0.1 + radius * (1 - np.cos(theta))
+    x, y = x + rng.normal(0, 0.003, len(x)), y + rng.normal(0, 0.003, len(y))
+    junk_x, junk_y = rng.uniform(0.07, 0.5, 120), rng.uniform(-0.4, 0.4, 120)  # 30 % scattered specks
+    fit = gl.fit_boundary(np.concatenate([x, junk_x]), np.concatenate([y, junk_y]), LANE, None)
+    assert fit is not None
+    expected = 0.0 if math.isinf(radius) else 1 / radius
+    assert fit.curvature_per_m == pytest.approx(expected, abs=0.15 * max(expected, 1.0))
+    assert np.mean(np.abs(fit.distance(x, y))) < 0.01
+    assert fit.inliers >= 0.9 * 300 and fit.support == 1.0
+
+
+# -- frames of a taped floor -------------------------------------------------------------------
+YELLOW_BGR, WHITE_BGR, MAT_GREY = (0, 200, 230), (235, 235, 235), 55
+
+
+def taped_floor(radius: float, left_of_centre_m: float = 0.0, yellow: bool = True, seed: int = 0) -> np.ndarray:
+    """The camera's view of a lane whose centre is a circle of ``radius`` (+ left, inf straight) through the camera
+    foot, tangent to the heading, with the camera ``left_of_centre_m`` left of it: yellow tape (2.5 cm) left and white (5 cm)
+    right, their inner edges half a lane from the centre, on a dark noisy mat."""
+    h = LANE.lane_width_m / 2
+    v, u = np.mgrid[0:H, 0:W].astype(np.float64)
+    angle = math.radians(CAMERA.pitch_deg) + np.arctan2(v - CAMERA.cy_px, CAMERA.fy_px)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = np.where(angle > 1e-6, CAMERA.mount_height_m / np.tan(angle), np.nan)
+    depth = x * math.cos(math.radians(CAMERA.pitch_deg)) + CAMERA.mount_height_m * math.sin(math.radians(CAMERA.pitch_deg))
+    y = -(u - CAMERA.cx_px) * depth / CAMERA.fx_px + left_of_centre_m  # lateral position from the lane centre, + left
+    if math.isinf(radius):
+        lateral = y
+    else:  # signed distance from the lane-centre circle, + toward the left boundary
+        lateral = np.sign(radius) * (abs(radius) - np.hypot(x, y - radius))
+    rng = np.random.default_rng(seed)
+    img = np.clip(rng.normal(MAT_GREY, 2.0, (H, W, 3)), 0, 255).astype(np.uint8)
+    img[~np.isfinite(x)] = (200, 160, 120)  # sky
+    if yellow:
+        img[(lateral >= h) & (lateral <= h + 0.025)] = YELLOW_BGR
+    img[(lateral <= -h) & (lateral >= -h - 0.05)] = WHITE_BGR
+    return img
+
+
+def _settled(frames: list[np.ndarray]) -> object:
+    pipe = FramePipeline(CAMERA, 30.0, ground=LANE)
+    analysis = None
+    for k, f in enumerate(frames):
+        analysis = pipe.process(f, t_s=k / 30)
+    return analysis
+
+
+@pytest.mark.parametrize("radius", [math.inf, 0.8, 0.45, -0.8])
+def test_on_a_clean_taped_floor_both_boundaries_are_trusted_and_the_aim_is_the_lane_centre(radius: float) -> None:
+    a = _settled([taped_floor(radius, seed=k) for k in range(4)])
+    assert a.ground.left is not None and a.ground.right is not None
+    assert a.lane_confidence >= 0.7
+    expected = 0.0 if math.isinf(radius) else math.degrees(math.asin(LANE.aim_m / (2 * radius)))
+    assert a.steering_deg == pytest.approx(expected, abs=3.0)
+
+
+def test_the_lane_width_stays_right_off_centre() -> None:
+    """Fitted on the markings' inner edges, the width does not jump to the tape's outer edge when the car is off centre."""
+    for left in (-0.04, 0.0, 0.04):
+        g = _settled([taped_floor(math.inf, left, seed=k) for k in range(3)]).ground
+        xs = np.array([0.15]), np.array([0.0])
+        width = float(-g.left.distance(*xs)[0] + g.right.distance(*xs)[0])
+        assert width == pytest.approx(LANE.lane_width_m, abs=0.01), left
+        assert float(g.right.distance(*xs)[0]) == pytest.approx(LANE.lane_width_m / 2 + left, abs=0.01)
+
+
+def test_a_car_off_centre_steers_back() -> None:
+    assert _settled([taped_floor(math.inf, -0.04, seed=k) for k in range(3)]).steering_deg > 3.0  # right of centre: left
+    assert _settled([taped_floor(math.inf, 0.04, seed=k) for k in range(3)]).steering_deg < -3.0
+
+
+def test_a_tight_curve_whose_inner_line_is_out_of_view_keeps_its_confidence() -> None:
+    """On the inside of a tight left curve seen from its outer side, the yellow line is beside the camera: the white
+    edge alone vouches for the lane (it is not counted as a missing boundary)."""
+    a = _settled([taped_floor(0.3, -0.06, yellow=False, seed=k) for k in range(3)])
+    assert a.ground.left is None and a.ground.right is not None
+    assert a.lane_confidence >= 0.6
+    assert a.steering_deg > 15.0
+
+
+def test_garbage_is_not_a_lane() -> None:
+    rng = np.random.default_rng(3)
+    a = _settled([rng.integers(0, 256, (H, W, 3), dtype=np.uint8) for _ in range(4)])
+    assert a.lane_confidence < 0.3
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(16, 80), st.integers(16, 80), st.integers(0, 255), st.booleans())
+def test_the_ground_pipeline_never_raises(w: int, h: int, fill: int, noisy: bool) -> None:
+    frame = np.full((h, w, 3), fill, np.uint8)
+    if noisy:
+        frame = np.random.default_rng(fill).integers(0, 256, (h, w, 3), dtype=np.uint8)
+    pipe = FramePipeline(CAMERA, 30.0, ground=LANE)
+    for k in range(2):
+        a = pipe.process(frame, t_s=k / 30)
+        assert 0.0 <= a.lane_confidence <= 1.0 or math.isnan(a.lane_confidence)
