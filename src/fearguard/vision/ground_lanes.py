@@ -27,7 +27,8 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.vision.lanes import LaneLine, RoadRegion, smoothed_light
+from fearguard.vision.lane_tracker import LOST_AFTER_S
+from fearguard.vision.lanes import RIDGE_MIN, YELLOW_SAT_MIN, LaneLine, RoadRegion, smoothed_light
 from fearguard.vision.occlusion import ROW_STEP
 
 HYPOTHESES = 48  # [-] RANSAC hypotheses per side (deterministic: a fixed-seed generator)
@@ -41,10 +42,9 @@ WIDTH_TOLERANCE = (0.3, 0.6)  # [-] relative lane-width error: full plausibility
 AGREEMENT_M = 0.35  # [-] of the lane width: mean disagreement with the prior at which agreement reaches 0
 WHITE_SAT_MAX = 60  # [0..255] white paint is unsaturated (Duckietown's mat: 5-26, its grass: 77-207)
 YELLOW_HUE = (14, 34)  # [OpenCV hue 0..180] yellow paint (Duckietown's: 26-29); grass (38-48) is not yellow here
-YELLOW_SAT_MIN = 70  # [0..255]
-YELLOW_LIGHT_MIN = 60  # [0..255]
-RIDGE_MIN = 14  # [grey levels] paint is this much brighter than the road around it (lanes.RIDGE_MIN) ...
-RIDGE_RATIO = 0.6  # [-] ... and by this share of the road's lightness (tape on a mat: 2-3; the mat's own pattern: < 0.6)
+YELLOW_LIGHT_MIN = 60  # [0..255] (saturation: lanes.YELLOW_SAT_MIN; contrast: lanes.RIDGE_MIN)
+RIDGE_RATIO = 0.6  # [-] paint is brighter than the road by this share of its lightness (tape on a mat: 2-3; the mat's own
+#   pattern: < 0.6; lanes.RIDGE_RATIO, 0.15, is for paint on asphalt in any light)
 RIDGE_WINDOW = (0.12, 0.35)  # [-] of the width: far and near top-hat windows, in rows and in columns
 MAX_CURVATURE = 8.0  # [1/m] a boundary bending tighter (radius < 12.5 cm) is no road edge a car can follow
 STRAIGHT = 1e-6  # [1/m] |a| below this (radius beyond 500 km) is a straight line
@@ -396,11 +396,9 @@ def agreement(now: GroundBoundary | None, before: GroundBoundary | None, spec: G
     return max(0.0, 1.0 - err / (AGREEMENT_M * spec.lane_width_m))
 
 
-LOST_AFTER_S = 1.0  # [s] boundaries not seen for this long are no prior any more
-
-
 class GroundMemory:
-    """Last frame's boundaries, each kept as the prior (the gate of its points) until LOST_AFTER_S unseen."""
+    """Last frame's boundaries, each kept as the prior (the gate of its points) until LOST_AFTER_S unseen (the image
+    tracks' limit)."""
 
     def __init__(self) -> None:
         self._last: list[tuple[float, GroundBoundary] | None] = [None, None]
