@@ -413,16 +413,6 @@ class GroundMemory:
                 self._last[i] = (t_s, b)
 
 
-class PassThroughGround:
-    """No memory: every frame is fitted without priors."""
-
-    def priors(self, t_s: float) -> GroundLanes | None:
-        return None
-
-    def remember(self, t_s: float, lanes: GroundLanes) -> None:
-        return None
-
-
 @dataclass(frozen=True)
 class GroundFit:
     """The ground model's result for the rest of the frame analysis, in working pixels."""

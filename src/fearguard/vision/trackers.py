@@ -17,7 +17,7 @@ from typing import Protocol
 import numpy as np
 
 from fearguard.observation import LeadBox
-from fearguard.vision.ground_lanes import GroundLanes, GroundMemory, PassThroughGround
+from fearguard.vision.ground_lanes import GroundLanes, GroundMemory
 from fearguard.vision.lane_tracker import LaneTracker, TrackedLanes
 from fearguard.vision.lanes import LaneLine, RoadRegion
 from fearguard.vision.lead import LeadTracker
@@ -115,6 +115,16 @@ class PassThroughConfidence:
 
     def update(self, confidence: float) -> float:
         return confidence
+
+
+class PassThroughGround:
+    """No ground-model memory: every frame is fitted without priors."""
+
+    def priors(self, t_s: float) -> GroundLanes | None:
+        return None
+
+    def remember(self, t_s: float, lanes: GroundLanes) -> None:
+        return None
 
 
 class PassThroughRoad:
