@@ -52,7 +52,11 @@ def overlay_boxes(width_px: int, height_px: int, cmd: Command | None, extra: str
 
 def _draw_perception(out: np.ndarray, analysis: FrameAnalysis, k: float) -> None:
     """The lane lines and the lead box perception saw."""
-    if analysis.region is not None:
+    if analysis.curves_px is not None:  # a bending lane: its boundaries as they were fitted, not their straight chords
+        for curve, colour in zip(analysis.curves_px, ((0, 0, 255), (0, 255, 0)), strict=True):
+            if curve is not None:
+                cv2.polylines(out, [np.rint(curve).astype(np.int32)], False, colour, max(1, int(2 * k)), cv2.LINE_AA)
+    elif analysis.region is not None:
         r, s = analysis.region, analysis.scale
         for line, colour in ((analysis.left, (0, 0, 255)), (analysis.right, (0, 255, 0))):
             if line is not None:

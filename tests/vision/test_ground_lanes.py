@@ -173,3 +173,16 @@ def test_the_ground_pipeline_never_raises(w: int, h: int, fill: int, noisy: bool
     for k in range(2):
         a = pipe.process(frame, t_s=k / 30)
         assert 0.0 <= a.lane_confidence <= 1.0 or math.isnan(a.lane_confidence)
+
+
+def test_the_overlay_draws_the_bending_boundaries_not_their_chords() -> None:
+    """On a curve a person sees the fitted curves: polylines on the tape's inner edges, inside the picture."""
+    a = _settled([taped_floor(0.45, seed=k) for k in range(3)])
+    left, right = a.curves_px
+    for curve in (left, right):
+        assert curve is not None and len(curve) >= 10
+        assert (curve[:, 1] >= a.region.top_v_px - 1).all() and (curve[:, 1] <= H).all()
+    # the fitted right boundary bends: its image direction turns by more than a straight line's would (none)
+    d0, d1 = right[1] - right[0], right[-1] - right[-2]
+    turn = abs(math.degrees(math.atan2(d1[1], d1[0]) - math.atan2(d0[1], d0[0])))
+    assert turn > 10.0

@@ -66,6 +66,7 @@ class FrameAnalysis:
     timings_ms: Mapping[str, float] = field(default_factory=dict)
     obstacle: Obstacle | None = None  # anything standing in the ego lane, with its ground-plane range (vision/obstacle.py)
     ground: GroundLanes | None = None  # the bending lane in the ground plane, when the pipeline fits one (vision/ground_lanes.py)
+    curves_px: tuple[np.ndarray | None, np.ndarray | None] | None = None  # its boundaries as polylines (u, v), frame pixels
 
 
 def invalid_frame_reason(frame: object) -> str | None:
@@ -177,6 +178,7 @@ class Lanes:
     ground: GroundLanes | None = None  # the ground-plane boundaries, when the lane model bends
     out_of_view: tuple[bool, bool] = (False, False)  # a missing side the lane model places outside the picture
     expected: tuple[tuple[np.ndarray, np.ndarray], ...] | None = None  # the bending boundaries as image points (occlusion's)
+    curves_px: tuple[np.ndarray | None, np.ndarray | None] | None = None  # ... as polylines in working pixels (the overlay's)
 
 
 @dataclass(frozen=True)
@@ -218,7 +220,8 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
             width_px = trackers.memory.remember_width(fit.left, fit.right, v_aim, region.width_px)
             return Lanes(left=fit.left, right=fit.right, seen_left=fit.left, seen_right=fit.right, agreement_left=fit.agreement[0],
                          agreement_right=fit.agreement[1], features=fit.features, paint_integral=fit.paint_integral, aim_row_px=v_aim,
-                         lane_width_px=width_px, ground=fit.lanes, out_of_view=fit.out_of_view, expected=fit.expected)
+                         lane_width_px=width_px, ground=fit.lanes, out_of_view=fit.out_of_view, expected=fit.expected,
+                         curves_px=fit.curves_px)
     det = detect_lanes(p.hls, region, p.mask, trackers.lanes.current(region))
     v_aim = lookahead_row(region)
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
@@ -320,6 +323,7 @@ def _analyze(
         qr_payloads=payloads, steering_deg=steering, exposure=p.exposure, evidence=evidence, left=lanes.left,
         right=lanes.right, region=p.region, scale=p.scale, lead_box=seen.box, road_reference=seen.road_reference,
         reasons=reasons, timings_ms=timings, obstacle=seen.obstacle, ground=lanes.ground,
+        curves_px=None if lanes.curves_px is None else tuple(c * p.scale if c is not None else None for c in lanes.curves_px),
     )
 
 

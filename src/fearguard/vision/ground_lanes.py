@@ -425,6 +425,7 @@ class GroundFit:
     paint_integral: np.ndarray  # its integral over the road rows
     out_of_view: tuple[bool, bool]  # a missing side that the model places outside the picture
     expected: tuple[tuple[np.ndarray, np.ndarray], ...]  # where the boundaries should show: (rows, columns) per side
+    curves_px: tuple[np.ndarray | None, np.ndarray | None]  # each boundary as an image polyline (n, 2: u, v), for the overlay
 
 
 def ground_lanes_in_image(
@@ -446,7 +447,19 @@ def ground_lanes_in_image(
     agree = (agreement(lanes.left, before.left, spec), agreement(lanes.right, before.right, spec))
     hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid),
               lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid))
-    return GroundFit(lanes, left, right, agree, features, integral, hidden, expected_points(lanes, cam, region, spec))
+    curves = tuple(_image_polyline(b, cam, spec) for b in (lanes.left, lanes.right))
+    return GroundFit(lanes, left, right, agree, features, integral, hidden, expected_points(lanes, cam, region, spec),
+                     (curves[0], curves[1]))
+
+
+def _image_polyline(boundary: GroundBoundary | None, camera: CameraModel, spec: GroundLaneSpec) -> np.ndarray | None:
+    """The boundary where its markings were seen (and EXPECT_BEYOND_M beyond), within the fit range, in image pixels."""
+    if boundary is None:
+        return None
+    pts = boundary.samples(EXPECT_BEYOND_M)
+    pts = pts[np.hypot(pts[:, 0], pts[:, 1]) <= spec.far_m]
+    u, v, ok = camera.project_ground(pts[:, 0], pts[:, 1])
+    return np.stack([u[ok], v[ok]], axis=1) if ok.sum() >= 2 else None
 
 
 def expected_points(
