@@ -400,15 +400,22 @@ def detect_lanes(
     lane_width = lane_width_rows(np.arange(region.top_v_px, region.bottom_v_px + 1), priors, region)
     plain = _plainness(maps.paint_integral[-1, -1] / max(1, cv2.countNonZero(mask)), region.clutter)
     fits = [list(candidate_fits(side, region, prior)) for side, prior in zip(sides, priors, strict=True)]
-    # every candidate of both sides scanned in one pass (the cost is per array operation, hardly per candidate) ...
-    scanned = ridge_lines(maps, region, fits[0] + fits[1], lane_width, [False] * len(fits[0]) + [True] * len(fits[1]))
+    # the preferred candidate of each side first, both in one pass: when it is well supported it cannot be beaten
+    # clearly, and the others need no scan; the others of the sides that still need them in a second pass
+    heads = ridge_lines(maps, region, fits[0][:1] + fits[1][:1], lane_width, [False] * len(fits[0][:1]) + [True] * len(fits[1][:1]))
+    scanned = [heads[: len(fits[0][:1])], heads[len(fits[0][:1]) :]]
+    rest = [bool(s) and s[0][1] * plain < PREFER_SHARE and len(f) > 1 for s, f in zip(scanned, fits, strict=True)]
+    if any(rest):
+        tails = [f[1:] if more else [] for f, more in zip(fits, rest, strict=True)]
+        more = ridge_lines(maps, region, tails[0] + tails[1], lane_width, [False] * len(tails[0]) + [True] * len(tails[1]))
+        scanned = [scanned[0] + more[: len(tails[0])], scanned[1] + more[len(tails[0]) :]]
     found: list[list[LaneLine]] = [[], []]
-    for i, results in enumerate((scanned[: len(fits[0])], scanned[len(fits[0]) :])):
+    for i, results in enumerate(scanned):
         for (a, b), support in results:
             support *= plain
             if support > 0:
                 found[i].append(LaneLine(a, b, support, len(sides[i])))
             if support >= PREFER_SHARE and len(found[i]) == 1:
-                break  # ... and used in preference order: a well-supported preferred line cannot be beaten clearly
+                break  # ... in preference order: a well-supported preferred line cannot be beaten clearly
     left, right = best_pair(found[0], found[1], region)
     return LaneDetection(region, left, right, features, len(segments), maps)

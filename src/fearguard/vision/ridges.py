@@ -16,6 +16,7 @@ ridge-with-flanks test, and it is a few array operations.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -114,38 +115,53 @@ def scan_ridges(
         return RidgeScan(rows, np.zeros((k, n), bool), np.zeros((k, n)), np.zeros(k))
     w = maps.feat.shape[1]
     lw = np.maximum(lane_width_px, 4.0)
-    search = max(2, int(SEARCH * w))
-    offsets = np.arange(-search, search + 1)
-    cols = np.rint(centre_u).astype(np.int64)[:, :, None] + offsets  # (k, n, offsets)
     rr = rows - maps.top_v_px
+    # the marking pixel nearest the candidate column within the search distance (a tie: the left one)
+    u = np.rint(centre_u).astype(np.int64)
+    cols = u[:, :, None] + _preference(max(2, int(SEARCH * w)))  # (k, n, offsets), nearest offset first
     cc = clamp(cols, 0, w - 1)
     near = maps.feat[rr[:, None], cc] & (cols == cc)
-    # the run of marking pixels nearest the candidate column (within the search distance)
-    j0 = np.argmin(np.where(near, np.abs(offsets), 10**6), axis=2)[:, :, None]
-    found = np.take_along_axis(near, j0, axis=2)[:, :, 0]
-    u0 = np.take_along_axis(cc, j0, axis=2)[:, :, 0]
-    a, b = maps.runs(rr, u0)
+    j0 = np.argmax(near, axis=2)  # the first True: the nearest marking pixel
+    at = np.flatnonzero(np.take_along_axis(near, j0[:, :, None], axis=2))  # flat (k·n) indices where one was found
+    # from here on only those points, as flat arrays
+    row_of = at % n
+    r, u0 = rr[row_of], cols.reshape(k * n, -1)[at, j0.ravel()[at]]
+    a, b = maps.runs(r, u0)
     width = b - a + 1
-    ok = found & (width >= np.maximum(MIN_WIDTH_PX, width_range[0] * lw)) & (width <= np.maximum(MAX_WIDTH_FLOOR * w, width_range[1] * lw))
+    lw_at = lw[row_of]
+    fits = (width >= np.maximum(MIN_WIDTH_PX, width_range[0] * lw_at)) & (width <= np.maximum(MAX_WIDTH_FLOOR * w, width_range[1] * lw_at))
+    at, r, a, b, width = at[fits], r[fits], a[fits], b[fits], width[fits]
     fw = np.maximum(2, width)
     lo = clamp(np.stack([a, a - FLANK_GAP_PX - fw, b + FLANK_GAP_PX + 1]), 0, w)  # spans: run, left flank, right flank
     hi = clamp(np.stack([b + 1, a - FLANK_GAP_PX, b + FLANK_GAP_PX + 1 + fw]), 0, w)
     count = hi - lo
-    means = _span_sums(maps.integrals, rr, lo, hi) / np.maximum(count, 1)  # (layers, spans, k, n)
+    means = _span_sums(maps.integrals, r, lo, hi) / np.maximum(count, 1)  # (layers, spans, points)
     paint = means[1::2, 0]  # each channel's mean over the run
-    stands_out = np.ones(paint.shape, bool)
+    stands_out = None
     for f in (1, 2):  # the flanks
-        plain = means[0, f] <= FLANK_PAINT_MAX  # the road beside paint holds (almost) no paint
         mean, sq = means[1::2, f], means[2::2, f]
         std = np.sqrt(np.maximum(sq - mean * mean, 0.0))
         contrast = paint - mean
-        passes = (paint >= CONTRAST_RATIO * mean) & (contrast >= CONTRAST_MIN) & (std <= FLANK_ROUGHNESS * contrast) & plain
-        stands_out &= passes | (count[f] == 0)  # a flank outside the image says nothing (lines leaving sideways)
-    ok &= (count[1] + count[2] > 0) & stands_out.any(axis=0)
-    ok = _in_long_runs(ok, MIN_RUN_ROWS)
-    inner = np.where(ok, np.where(np.asarray(inner_is_left)[:, None], a, b), np.nan).astype(np.float64)
-    support = np.minimum(1.0, ok.mean(axis=1) / SUPPORT_FULL)
+        passes = (paint >= CONTRAST_RATIO * mean) & (contrast >= CONTRAST_MIN) & (std <= FLANK_ROUGHNESS * contrast)
+        passes &= means[0, f] <= FLANK_PAINT_MAX  # the road beside paint holds (almost) no paint
+        passes |= count[f] == 0  # a flank outside the image says nothing (lines leaving sideways)
+        stands_out = passes if stands_out is None else stands_out & passes
+    good = (count[1] + count[2] > 0) & stands_out.any(axis=0)
+    ok = np.zeros(k * n, bool)
+    ok[at[good]] = True
+    ok = _in_long_runs(ok.reshape(k, n), MIN_RUN_ROWS)
+    inner = np.full(k * n, np.nan)
+    inner[at] = np.where(np.asarray(inner_is_left)[at // n], a, b)
+    inner = np.where(ok, inner.reshape(k, n), np.nan)
+    support = np.minimum(1.0, np.count_nonzero(ok, axis=1) / n / SUPPORT_FULL)
     return RidgeScan(rows, ok, inner, support)
+
+
+@lru_cache(maxsize=4)
+def _preference(search: int) -> np.ndarray:
+    """Column offsets -search..search, nearest first and left before right: 0, -1, 1, -2, 2, ..."""
+    offsets = np.arange(-search, search + 1)
+    return offsets[np.argsort(np.abs(offsets), kind="stable")]
 
 
 def clamp(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
@@ -156,18 +172,18 @@ def clamp(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
 
 
 def _in_long_runs(ok: np.ndarray, min_rows: int) -> np.ndarray:
-    """ok (candidates, rows), keeping only runs of at least min_rows consecutive True rows (vectorised: the run edges
-    of all candidates at once, a False column between candidates)."""
-    k, n = ok.shape
+    """ok (candidates, rows), keeping only runs of at least min_rows consecutive True rows: a row is kept when some
+    window of min_rows rows around it is all True (a few shifted ANDs and ORs, all candidates at once)."""
+    n = ok.shape[1]
     if min_rows <= 1 or n == 0:
         return ok
-    padded = np.zeros((k, n + 2), np.int8)
-    padded[:, 1:-1] = ok
-    change = np.diff(padded.ravel())
-    # in the flat padded layout: each run's first index and the index just after its last
-    first, after = np.flatnonzero(change == 1) + 1, np.flatnonzero(change == -1) + 1
-    long = after - first >= min_rows
-    edges = np.zeros(padded.size + 1, np.int8)
-    edges[first[long]] = 1
-    edges[after[long]] = -1
-    return (np.cumsum(edges[:-1]) > 0).reshape(k, n + 2)[:, 1:-1]
+    if n < min_rows:
+        return np.zeros_like(ok)
+    span = n - min_rows + 1
+    full = ok[:, :span].copy()  # full[:, i]: rows i .. i + min_rows - 1 all True
+    for s in range(1, min_rows):
+        full &= ok[:, s : s + span]
+    out = np.zeros_like(ok)
+    for s in range(min_rows):
+        out[:, s : s + span] |= full
+    return out
