@@ -92,11 +92,10 @@ def test_the_fit_recovers_an_arc_or_a_line_among_outliers(radius: float) -> None
 YELLOW_BGR, WHITE_BGR, MAT_GREY = (0, 200, 230), (235, 235, 235), 55
 
 
-def taped_floor(radius: float, left_of_centre_m: float = 0.0, yellow: bool = True, seed: int = 0) -> np.ndarray:
-    """The camera's view of a lane whose centre is a circle of ``radius`` (+ left, inf straight) through the camera
-    foot, tangent to the heading, with the camera ``left_of_centre_m`` left of it: yellow tape (2.5 cm) left and white (5 cm)
-    right, their inner edges half a lane from the centre, on a dark noisy mat."""
-    h = LANE.lane_width_m / 2
+def floor_lateral(radius: float, left_of_centre_m: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Per pixel: forward ground distance x (NaN above the horizon) and the signed distance from the lane centre (+
+    toward the left boundary) of a lane whose centre is a circle of ``radius`` (+ left, inf straight) through the
+    camera foot, tangent to the heading, with the camera ``left_of_centre_m`` left of it."""
     v, u = np.mgrid[0:H, 0:W].astype(np.float64)
     angle = math.radians(CAMERA.pitch_deg) + np.arctan2(v - CAMERA.cy_px, CAMERA.fy_px)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -104,15 +103,29 @@ def taped_floor(radius: float, left_of_centre_m: float = 0.0, yellow: bool = Tru
     depth = x * math.cos(math.radians(CAMERA.pitch_deg)) + CAMERA.mount_height_m * math.sin(math.radians(CAMERA.pitch_deg))
     y = -(u - CAMERA.cx_px) * depth / CAMERA.fx_px + left_of_centre_m  # lateral position from the lane centre, + left
     if math.isinf(radius):
-        lateral = y
-    else:  # signed distance from the lane-centre circle, + toward the left boundary
-        lateral = np.sign(radius) * (abs(radius) - np.hypot(x, y - radius))
+        return x, y
+    return x, np.sign(radius) * (abs(radius) - np.hypot(x, y - radius))
+
+
+def taped_floor(
+    radius: float, left_of_centre_m: float = 0.0, yellow: bool = True, seed: int = 0, cone_at_m: float | None = None,
+    cone_bgr: tuple[int, int, int] = (0, 90, 240),
+) -> np.ndarray:
+    """The camera's view of the lane of ``floor_lateral``: yellow tape (2.5 cm) left and white (5 cm) right, their inner
+    edges half a lane from the centre, on a dark noisy mat; with ``cone_at_m``, an orange object 6 cm wide standing on
+    the lane centre that far ahead (its front face, 30 rows tall; ``cone_bgr``: its colour)."""
+    h = LANE.lane_width_m / 2
+    x, lateral = floor_lateral(radius, left_of_centre_m)
     rng = np.random.default_rng(seed)
     img = np.clip(rng.normal(MAT_GREY, 2.0, (H, W, 3)), 0, 255).astype(np.uint8)
     img[~np.isfinite(x)] = (200, 160, 120)  # sky
     if yellow:
         img[(lateral >= h) & (lateral <= h + 0.025)] = YELLOW_BGR
     img[(lateral <= -h) & (lateral >= -h - 0.05)] = WHITE_BGR
+    if cone_at_m is not None:
+        v0 = int(np.nanargmin(np.abs(x[:, W // 2] - cone_at_m)))  # the row it stands on
+        cols = np.flatnonzero(np.abs(lateral[v0]) <= 0.03)
+        img[v0 - 30 : v0 + 1, cols.min() : cols.max() + 1] = cone_bgr
     return img
 
 
@@ -186,3 +199,52 @@ def test_the_overlay_draws_the_bending_boundaries_not_their_chords() -> None:
     d0, d1 = right[1] - right[0], right[-1] - right[-2]
     turn = abs(math.degrees(math.atan2(d1[1], d1[0]) - math.atan2(d0[1], d0[0])))
     assert turn > 10.0
+
+
+@pytest.mark.parametrize("radius", [math.inf, 0.45, -0.6])
+def test_the_lane_interior_follows_the_curve_and_keeps_off_the_tape(radius: float) -> None:
+    """The object search and the road model look between the fitted curves: on a bend, not across the verge."""
+    pipe = FramePipeline(CAMERA, 30.0, ground=LANE)
+    for k in range(3):
+        pipe.process(taped_floor(radius, seed=k), t_s=k / 30)
+    from fearguard.vision.frame import find_lanes, prepare  # the stage that owns the interior
+
+    p = prepare(taped_floor(radius, seed=9), CAMERA)
+    lanes = find_lanes(p, pipe.trackers, 0.2, LANE)
+    assert lanes.interior is not None
+    x, lateral = floor_lateral(radius)
+    band = slice(p.region.top_v_px, p.region.bottom_v_px + 1)
+    inside = lanes.interior
+    assert (np.abs(lateral[band][inside]) < LANE.lane_width_m / 2).all()  # never on the tape, never beyond it
+    lane_near = (np.abs(lateral[band]) < 0.3 * LANE.lane_width_m) & (x[band] < 0.3)
+    assert inside[lane_near].mean() > 0.9  # and it covers the lane's middle ahead
+
+
+@pytest.mark.parametrize(("radius", "colour"), [(math.inf, (0, 90, 240)), (0.45, (0, 90, 240)), (math.inf, (40, 215, 250))])
+def test_an_object_in_the_lane_of_a_bending_model_is_seen_at_its_range(radius: float, colour: tuple[int, int, int]) -> None:
+    """Without a range sensor the camera is the only eye: an object standing in the lane (an orange cone, a yellow
+    duck), on a straight or a curve, is found and ranged from the row it stands on; the clean lane has none."""
+    clean = _settled([taped_floor(radius, seed=k) for k in range(6)])
+    assert clean.obstacle is None
+    ahead = [taped_floor(radius, seed=k, cone_at_m=0.3, cone_bgr=colour) for k in range(4)]
+    seen = _settled([taped_floor(radius, seed=k) for k in range(3)] + ahead)
+    assert seen.obstacle is not None and seen.obstacle.range_m == pytest.approx(0.3, abs=0.03)
+
+
+def test_the_interior_stops_at_the_white_edge_line_where_the_fit_strays_beyond_it() -> None:
+    """A fit that strays at its far end (a tape corner) must not carry the object search over the tape onto the verge."""
+    from fearguard.vision.lanes import road_region
+
+    region = road_region(W, H, CAMERA)
+    grid = gl.ground_grid(CAMERA, region.top_v_px, region.bottom_v_px, LANE.far_m)
+    h = LANE.lane_width_m / 2
+    left = _boundary(np.array([0.0, 0.0, 1.0, -h]))  # the line y = h (+ left of it)
+    strayed = _boundary(np.array([0.0, 0.0, 1.0, h + 0.12]))  # y = -h - 12 cm: its interior runs past the 5 cm tape
+    lanes = gl.GroundLanes(left, strayed, 1.0, 100)
+    _, lateral = floor_lateral(math.inf)
+    band = slice(region.top_v_px, region.bottom_v_px + 1)
+    white = (lateral[band] <= -h) & (lateral[band] >= -h - 0.05)
+    assert (gl.lane_interior(lanes, grid, region, LANE, np.zeros_like(white)) & (lateral[band] < -h - 0.05)).any()
+    walled = gl.lane_interior(lanes, grid, region, LANE, white)
+    assert not (walled & (lateral[band] < -h)).any()
+    assert walled[lateral[band] > 0].any()  # the lane itself stays

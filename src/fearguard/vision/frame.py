@@ -179,6 +179,7 @@ class Lanes:
     out_of_view: tuple[bool, bool] = (False, False)  # a missing side the lane model places outside the picture
     expected: tuple[tuple[np.ndarray, np.ndarray], ...] | None = None  # the bending boundaries as image points (occlusion's)
     curves_px: tuple[np.ndarray | None, np.ndarray | None] | None = None  # ... as polylines in working pixels (the overlay's)
+    interior: np.ndarray | None = None  # ... the lane between them, over the road rows (the road model's, the object search's)
 
 
 @dataclass(frozen=True)
@@ -221,7 +222,7 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
             return Lanes(left=fit.left, right=fit.right, seen_left=fit.left, seen_right=fit.right, agreement_left=fit.agreement[0],
                          agreement_right=fit.agreement[1], features=fit.features, paint_integral=fit.paint_integral, aim_row_px=v_aim,
                          lane_width_px=width_px, ground=fit.lanes, out_of_view=fit.out_of_view, expected=fit.expected,
-                         curves_px=fit.curves_px)
+                         curves_px=fit.curves_px, interior=fit.interior)
     det = detect_lanes(p.hls, region, p.mask, trackers.lanes.current(region))
     v_aim = lookahead_row(region)
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
@@ -253,15 +254,17 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
         box = trackers.leads.update(t_s, found.scaled(p.scale) if found is not None else None)
     boxes = (box.scaled(1.0 / p.scale).as_int(),) if box is not None else ()
     surface = surface_maps(p.gray, p.hls, lanes.features, p.region, lanes.paint_integral)
-    measured = road_appearance(p.gray, p.hls, p.region, expected_l, expected_r, surface)
+    measured = road_appearance(p.gray, p.hls, p.region, expected_l, expected_r, surface, interior=lanes.interior)
     road = trackers.road.reference(measured)
     occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface, curves=lanes.expected)
     trackers.road.learn(measured, occ)
     obstacle = None
-    # a range needs the mounting height (without it the search is skipped). With the bending lane model the search is
-    # off: between its boundaries on Duckietown's curves it found the mat and the verge foreign (false stops every lap)
-    if p.camera.mount_height_m is not None and lanes.ground is None:
-        obstacle = detect_obstacle(surface, road, p.region, expected_l, expected_r, p.camera, p.scale)
+    # a range needs the mounting height (without it the search is skipped). The bending lane model searches its own
+    # interior, round the curve (the straight chords between its boundaries cut across the verge there), and on the
+    # tiled floors it serves a smoother tile is no object
+    if p.camera.mount_height_m is not None and (lanes.ground is None or lanes.interior is not None):
+        obstacle = detect_obstacle(surface, road, p.region, expected_l, expected_r, p.camera, p.scale, interior=lanes.interior,
+                                   smooth_objects=lanes.ground is None)
     obstacle = trackers.obstacles.update(obstacle)
     lead = lead_from_box(box, p.camera) if box is not None else None
     return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference, obstacle=obstacle)

@@ -426,6 +426,8 @@ class GroundFit:
     out_of_view: tuple[bool, bool]  # a missing side that the model places outside the picture
     expected: tuple[tuple[np.ndarray, np.ndarray], ...]  # where the boundaries should show: (rows, columns) per side
     curves_px: tuple[np.ndarray | None, np.ndarray | None]  # each boundary as an image polyline (n, 2: u, v), for the overlay
+    interior: np.ndarray | None = None  # bool over the road rows: pixels whose ground lies inside the lane, inset from its
+    #   boundaries, as far as the markings were seen (the road model's samples, the object search)
 
 
 def ground_lanes_in_image(
@@ -449,7 +451,7 @@ def ground_lanes_in_image(
               lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid))
     curves = tuple(_image_polyline(b, cam, spec) for b in (lanes.left, lanes.right))
     return GroundFit(lanes, left, right, agree, features, integral, hidden, expected_points(lanes, cam, region, spec),
-                     (curves[0], curves[1]))
+                     (curves[0], curves[1]), lane_interior(lanes, grid, region, spec, white[band] > 0))
 
 
 def _image_polyline(boundary: GroundBoundary | None, camera: CameraModel, spec: GroundLaneSpec) -> np.ndarray | None:
@@ -482,6 +484,47 @@ def expected_points(
         rows = np.minimum(region.top_v_px + ROW_STEP * np.rint((v[keep] - region.top_v_px) / ROW_STEP), last)
         out.append((rows.astype(np.int64), np.rint(u[keep]).astype(np.int64)))
     return tuple(out)
+
+
+INTERIOR_INSET = 0.15  # [-] of the lane width: the interior keeps this far inside both boundaries (their paint stays out)
+
+
+def lane_interior(
+    lanes: GroundLanes, grid: GroundGrid, region: RoadRegion, spec: GroundLaneSpec, white: np.ndarray,
+) -> np.ndarray | None:
+    """bool (road rows, width): the pixels whose ground point lies between the two boundaries — following their curves,
+    INTERIOR_INSET of the lane width inside each — and no farther than the markings were seen (EXPECT_BEYOND_M beyond
+    the farthest), nor beyond the edge line: on each row the interior ends at the first white paint pixel (``white``,
+    bool over the road rows) either side of its middle, where a fit that strays at its far end (a tape corner) would
+    cross the tape onto the verge. Yellow is no wall: a yellow duck stands in the lane, and beyond the yellow centre
+    line lies more road. A missing side is the seen one a lane width over. None without any boundary.
+
+    On a curve the straight chords between the boundaries cut across the verge; this follows the lane round it."""
+    w = spec.lane_width_m
+    left = lanes.left if lanes.left is not None else (lanes.right.offset(w) if lanes.right is not None else None)
+    right = lanes.right if lanes.right is not None else (lanes.left.offset(-w) if lanes.left is not None else None)
+    if left is None or right is None:
+        return None
+    seen = [b for b in (lanes.left, lanes.right) if b is not None]
+    reach = min(spec.far_m, max(math.hypot(*b.end) for b in seen) + EXPECT_BEYOND_M)
+    out = np.zeros((region.bottom_v_px - region.top_v_px + 1, region.width_px), bool)
+    rows = np.flatnonzero(grid.x_m <= reach)  # grid rows (from grid.top_v_px) within reach ahead
+    if len(rows) == 0:
+        return out
+    cols = np.arange(region.width_px, dtype=np.float64)
+    x = np.repeat(grid.x_m[rows], region.width_px)
+    y = (-(cols[None, :] - grid.cx_px) * grid.lateral_m_per_px[rows][:, None]).ravel()
+    inset = INTERIOR_INSET * w
+    inside = (left.distance(x, y) <= -inset) & (right.distance(x, y) >= inset) & (np.hypot(x, y) <= reach)
+    inside = inside.reshape(len(rows), region.width_px)
+    band_rows = rows + grid.top_v_px - region.top_v_px
+    has = inside.any(axis=1)
+    middle = np.where(has, np.argmax(inside, axis=1) + inside.sum(axis=1) // 2, 0)[:, None]  # a column inside each row
+    wall = white[band_rows]
+    right_of = np.logical_or.accumulate(wall & (cols[None, :] >= middle), axis=1)
+    left_of = np.logical_or.accumulate((wall & (cols[None, :] <= middle))[:, ::-1], axis=1)[:, ::-1]
+    out[band_rows] = inside & ~right_of & ~left_of
+    return out
 
 
 VISIBLE_SHARE = 0.25  # [-] a boundary with less than this share of its near 0.3 m inside the road region is out of view

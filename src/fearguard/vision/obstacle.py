@@ -52,8 +52,13 @@ class Obstacle:
     range_m: float | None  # None without the camera's mounting height
 
 
-def foreign_mask(maps: SurfaceMaps, road: RoadAppearance, columns: slice = slice(None)) -> np.ndarray:
-    """bool over the maps' band (those columns): patches that do not look like the road (any colour, any size)."""
+def foreign_mask(maps: SurfaceMaps, road: RoadAppearance, columns: slice = slice(None), *, smooth_objects: bool = True) -> np.ndarray:
+    """bool over the maps' band (those columns): patches that do not look like the road (any colour, any size).
+
+    ``smooth_objects=False``: a patch smoother than the road but of its grey and colour is not foreign. On a tiled
+    floor (Duckietown's curve tiles are ~3× rougher than its straight ones) that is the next tile, not an object; the
+    objects there are coloured (ducks, cones), dark or pale. A smooth object of the road's own grey is then missed:
+    it is the range sensor's to see."""
     grey, sat, rough = maps.grey[:, columns], maps.saturation[:, columns], maps.roughness[:, columns]
     ref = max(road.grey, 1.0)
     off = np.abs(grey - ref) >= FOREIGN_DEV_MIN
@@ -61,27 +66,37 @@ def foreign_mask(maps: SurfaceMaps, road: RoadAppearance, columns: slice = slice
     coloured = lit & ((sat >= COLOUR_SAT_MIN) | (np.abs(sat - road.saturation) >= SAT_DEV))
     foreign = coloured | (off & (grey < DARKER * ref))
     if road.roughness >= ROUGH_MIN:
-        foreign |= rough < SMOOTH_SHARE * road.roughness
+        if smooth_objects:
+            foreign |= rough < SMOOTH_SHARE * road.roughness
         foreign |= off & (grey > BRIGHTER * ref) & (rough < SMOOTHER_SHARE * road.roughness)
     return foreign
 
 
 def detect_obstacle(
     maps: SurfaceMaps, road: RoadAppearance, region: RoadRegion, left: LaneLine, right: LaneLine, camera: CameraModel,
-    scale: float,
+    scale: float, *, interior: np.ndarray | None = None, smooth_objects: bool = True,
 ) -> Obstacle | None:
-    """The nearest object in the ego lane of a working image (None when the lane interior looks like road)."""
+    """The nearest object in the ego lane of a working image (None when the lane interior looks like road).
+
+    The interior lies between the straight boundaries, inset by INSET of the lane width — or, when the lane model bends,
+    is given: ``interior``, bool over the road rows (``ground_lanes.lane_interior``). ``smooth_objects``: see
+    ``foreign_mask``."""
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
-    a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
-    inset = INSET * (b - a)
-    lo = np.clip(np.ceil(a + inset), 0, region.width_px).astype(np.int64)
-    hi = np.clip(np.floor(b - inset), 0, region.width_px).astype(np.int64)
-    c0, c1 = int(lo.min()), int(max(hi.max(), lo.min()))  # only the columns some row's interior covers are judged
-    cols = np.arange(c0, c1)[None, :]
-    inside = (cols >= lo[:, None]) & (cols < hi[:, None])
-    foreign = foreign_mask(maps, road, slice(c0, c1)) & inside
+    if interior is None:
+        a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
+        inset = INSET * (b - a)
+        lo = np.clip(np.ceil(a + inset), 0, region.width_px).astype(np.int64)
+        hi = np.clip(np.floor(b - inset), 0, region.width_px).astype(np.int64)
+        c0, c1 = int(lo.min()), int(max(hi.max(), lo.min()))  # only the columns some row's interior covers are judged
+        cols = np.arange(c0, c1)[None, :]
+        inside = (cols >= lo[:, None]) & (cols < hi[:, None])
+        width = np.maximum(hi - lo, 0)
+    else:
+        c0, c1 = 0, region.width_px
+        inside = interior
+        width = interior.sum(axis=1)
+    foreign = foreign_mask(maps, road, slice(c0, c1), smooth_objects=smooth_objects) & inside
     count = foreign.sum(axis=1)
-    width = np.maximum(hi - lo, 0)
     hit = (width > 0) & (count >= np.maximum(MIN_PX, MIN_SHARE * width))
     bottom = _lowest_stretch_end(hit, MIN_ROWS)
     if bottom is None:

@@ -135,11 +135,19 @@ def surface_maps(
 
 
 def road_appearance(
-    gray: np.ndarray, hls: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine, maps: SurfaceMaps | None = None
+    gray: np.ndarray, hls: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine, maps: SurfaceMaps | None = None,
+    *, interior: np.ndarray | None = None,
 ) -> RoadAppearance:
     """The lane interior's appearance over the whole road region (medians over patches spread through it: one
-    shadow or patch of concrete does not set it)."""
+    shadow or patch of concrete does not set it). The interior: between the straight boundaries, or ``interior`` (bool
+    over the road rows: the bending lane's, ``ground_lanes.lane_interior``), sampled on every 2·ROW_STEP-th row."""
     maps = maps if maps is not None else surface_maps(gray, hls, np.zeros_like(gray), region)
+    if interior is not None:
+        sampled = np.zeros_like(interior)
+        sampled[1 :: 2 * ROW_STEP, ::2] = interior[1 :: 2 * ROW_STEP, ::2]
+        if sampled.any():
+            return RoadAppearance(float(np.median(maps.grey[sampled])), float(np.median(maps.saturation[sampled])),
+                                  float(np.median(maps.roughness[sampled])))
     rows = np.arange(region.top_v_px + 1, region.bottom_v_px, 2 * ROW_STEP)
     a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
     lo, hi = np.minimum(a, b), np.maximum(a, b)

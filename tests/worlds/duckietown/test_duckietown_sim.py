@@ -137,3 +137,12 @@ def test_guarded_robot_takes_the_curves_of_loop_empty(tmp_path: Path) -> None:
     s = drive(DriveOptions("loop_empty", seconds=25, plots=False), tmp_path).summary
     assert s["departures"] == 0 and s["centre_line_crossings"] == 0 and s["collisions"] == 0 and not s["invalid_pose"]
     assert s["progress_m"] > 0.85 * 4.9
+
+
+def test_without_a_range_sensor_the_guarded_robot_stops_for_a_duck_and_goes_on(tmp_path: Path) -> None:
+    """A DB18 has no range sensor: the camera's object search, inside the bending lane, must stop it short of a duck
+    1 m ahead, and it must drive on once the duck is taken away (3 s after it stood)."""
+    s = drive(DriveOptions("straight_road", seconds=12, obstacle="duck", plots=False), tmp_path).summary
+    ob = s["obstacle"]
+    assert not ob["contact"] and ob["stopped_before_contact"] and ob["went_on"]
+    assert s["collisions"] == 0 and s["departures"] == 0
