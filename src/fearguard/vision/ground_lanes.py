@@ -511,19 +511,28 @@ def lane_interior(
     rows = np.flatnonzero(grid.x_m <= reach)  # grid rows (from grid.top_v_px) within reach ahead
     if len(rows) == 0:
         return out
-    cols = np.arange(region.width_px, dtype=np.float64)
-    x = np.repeat(grid.x_m[rows], region.width_px)
-    y = (-(cols[None, :] - grid.cx_px) * grid.lateral_m_per_px[rows][:, None]).ravel()
+    cols = np.arange(region.width_px)
+    x = grid.x_m[rows][:, None]
+    y = -(cols[None, :] - grid.cx_px) * grid.lateral_m_per_px[rows][:, None]  # (rows, width)
+    r2 = x * x + y * y
     inset = INTERIOR_INSET * w
-    inside = (left.distance(x, y) <= -inset) & (right.distance(x, y) >= inset) & (np.hypot(x, y) <= reach)
-    inside = inside.reshape(len(rows), region.width_px)
+    inside = r2 <= reach * reach
+    # right of the left boundary by the inset and left of the right one: the sign of the offset curves' polynomial is
+    # the sign of the distance (no square root per pixel); a curve with no offset there is judged by its distance
+    for curve, delta, sign in ((left, -inset, -1.0), (right, inset, 1.0)):
+        moved = curve.offset(delta)
+        if moved is not None:
+            inside &= sign * (moved.a * r2 + moved.b * x + moved.c * y + moved.d) >= 0.0
+        else:
+            inside &= (sign * (curve.distance(np.broadcast_to(x, y.shape).ravel(), y.ravel()) - delta) >= 0.0).reshape(y.shape)
     band_rows = rows + grid.top_v_px - region.top_v_px
     has = inside.any(axis=1)
     middle = np.where(has, np.argmax(inside, axis=1) + inside.sum(axis=1) // 2, 0)[:, None]  # a column inside each row
     wall = white[band_rows]
-    right_of = np.logical_or.accumulate(wall & (cols[None, :] >= middle), axis=1)
-    left_of = np.logical_or.accumulate((wall & (cols[None, :] <= middle))[:, ::-1], axis=1)[:, ::-1]
-    out[band_rows] = inside & ~right_of & ~left_of
+    right_wall, left_wall = wall & (cols >= middle), wall & (cols <= middle)
+    first_right = np.where(right_wall.any(axis=1), np.argmax(right_wall, axis=1), region.width_px)[:, None]
+    last_left = np.where(left_wall.any(axis=1), region.width_px - 1 - np.argmax(left_wall[:, ::-1], axis=1), -1)[:, None]
+    out[band_rows] = inside & (cols > last_left) & (cols < first_right)
     return out
 
 

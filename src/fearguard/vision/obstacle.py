@@ -92,9 +92,10 @@ def detect_obstacle(
         inside = (cols >= lo[:, None]) & (cols < hi[:, None])
         width = np.maximum(hi - lo, 0)
     else:
-        c0, c1 = 0, region.width_px
-        inside = interior
-        width = interior.sum(axis=1)
+        spans = np.flatnonzero(interior.any(axis=0))
+        c0, c1 = (int(spans[0]), int(spans[-1]) + 1) if len(spans) else (0, 0)  # only the columns the interior covers
+        inside = interior[:, c0:c1]
+        width = inside.sum(axis=1)
     foreign = foreign_mask(maps, road, slice(c0, c1), smooth_objects=smooth_objects) & inside
     count = foreign.sum(axis=1)
     hit = (width > 0) & (count >= np.maximum(MIN_PX, MIN_SHARE * width))

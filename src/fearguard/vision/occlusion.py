@@ -143,11 +143,11 @@ def road_appearance(
     over the road rows: the bending lane's, ``ground_lanes.lane_interior``), sampled on every 2·ROW_STEP-th row."""
     maps = maps if maps is not None else surface_maps(gray, hls, np.zeros_like(gray), region)
     if interior is not None:
-        sampled = np.zeros_like(interior)
-        sampled[1 :: 2 * ROW_STEP, ::2] = interior[1 :: 2 * ROW_STEP, ::2]
-        if sampled.any():
-            return RoadAppearance(float(np.median(maps.grey[sampled])), float(np.median(maps.saturation[sampled])),
-                                  float(np.median(maps.roughness[sampled])))
+        r, c = np.nonzero(interior[1 :: 2 * ROW_STEP, ::2])
+        if len(r):
+            r, c = 1 + 2 * ROW_STEP * r, 2 * c
+            grey, sat, rough = np.median(np.stack([maps.grey[r, c], maps.saturation[r, c], maps.roughness[r, c]]), axis=1)
+            return RoadAppearance(float(grey), float(sat), float(rough))
     rows = np.arange(region.top_v_px + 1, region.bottom_v_px, 2 * ROW_STEP)
     a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
     lo, hi = np.minimum(a, b), np.maximum(a, b)
