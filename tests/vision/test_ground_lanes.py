@@ -16,7 +16,8 @@ from hypothesis import strategies as st
 
 from fearguard.camera import CameraModel
 from fearguard.vision import ground_lanes as gl
-from fearguard.vision.frame import FramePipeline
+from fearguard.vision.frame import FramePipeline, find_lanes, prepare
+from fearguard.vision.lanes import road_region
 
 LANE = gl.GroundLaneSpec(lane_width_m=0.236, near_m=0.07, far_m=0.5, aim_m=0.25)
 W, H = 320, 240
@@ -207,8 +208,6 @@ def test_the_lane_interior_follows_the_curve_and_keeps_off_the_tape(radius: floa
     pipe = FramePipeline(CAMERA, 30.0, ground=LANE)
     for k in range(3):
         pipe.process(taped_floor(radius, seed=k), t_s=k / 30)
-    from fearguard.vision.frame import find_lanes, prepare  # the stage that owns the interior
-
     p = prepare(taped_floor(radius, seed=9), CAMERA)
     lanes = find_lanes(p, pipe.trackers, 0.2, LANE)
     assert lanes.interior is not None
@@ -233,8 +232,6 @@ def test_an_object_in_the_lane_of_a_bending_model_is_seen_at_its_range(radius: f
 
 def test_the_interior_stops_at_the_white_edge_line_where_the_fit_strays_beyond_it() -> None:
     """A fit that strays at its far end (a tape corner) must not carry the object search over the tape onto the verge."""
-    from fearguard.vision.lanes import road_region
-
     region = road_region(W, H, CAMERA)
     grid = gl.ground_grid(CAMERA, region.top_v_px, region.bottom_v_px, LANE.far_m)
     h = LANE.lane_width_m / 2

@@ -29,6 +29,7 @@ import numpy as np
 from fearguard.camera import CameraModel
 from fearguard.vision.lane_tracker import LOST_AFTER_S
 from fearguard.vision.lanes import RIDGE_MIN, YELLOW_SAT_MIN, LaneLine, RoadRegion, smoothed_light
+from fearguard.vision.obstacle import INSET
 from fearguard.vision.occlusion import ROW_STEP
 
 HYPOTHESES = 48  # [-] RANSAC hypotheses per side (deterministic: a fixed-seed generator)
@@ -486,14 +487,11 @@ def expected_points(
     return tuple(out)
 
 
-INTERIOR_INSET = 0.15  # [-] of the lane width: the interior keeps this far inside both boundaries (their paint stays out)
-
-
 def lane_interior(
     lanes: GroundLanes, grid: GroundGrid, region: RoadRegion, spec: GroundLaneSpec, white: np.ndarray,
 ) -> np.ndarray | None:
     """bool (road rows, width): the pixels whose ground point lies between the two boundaries — following their curves,
-    INTERIOR_INSET of the lane width inside each — and no farther than the markings were seen (EXPECT_BEYOND_M beyond
+    obstacle.INSET of the lane width inside each — and no farther than the markings were seen (EXPECT_BEYOND_M beyond
     the farthest), nor beyond the edge line: on each row the interior ends at the first white paint pixel (``white``,
     bool over the road rows) either side of its middle, where a fit that strays at its far end (a tape corner) would
     cross the tape onto the verge. Yellow is no wall: a yellow duck stands in the lane, and beyond the yellow centre
@@ -515,7 +513,7 @@ def lane_interior(
     x = grid.x_m[rows][:, None]
     y = -(cols[None, :] - grid.cx_px) * grid.lateral_m_per_px[rows][:, None]  # (rows, width)
     r2 = x * x + y * y
-    inset = INTERIOR_INSET * w
+    inset = INSET * w
     inside = r2 <= reach * reach
     # right of the left boundary by the inset and left of the right one: the sign of the offset curves' polynomial is
     # the sign of the distance (no square root per pixel); a curve with no offset there is judged by its distance

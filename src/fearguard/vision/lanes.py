@@ -355,6 +355,16 @@ def ridge_lines(
     return out
 
 
+def _scan_sides(
+    maps: RidgeMaps, region: RoadRegion, per_side: list[list[tuple[float, float]]], lane_width: np.ndarray
+) -> list[list[tuple[tuple[float, float], float]]]:
+    """``ridge_lines`` of the left and the right candidates in one pass (the cost is mostly per array operation),
+    split back by side."""
+    left, right = per_side
+    out = ridge_lines(maps, region, left + right, lane_width, [False] * len(left) + [True] * len(right))
+    return [out[: len(left)], out[len(left) :]]
+
+
 def best_pair(
     lefts: list[LaneLine], rights: list[LaneLine], region: RoadRegion
 ) -> tuple[LaneLine | None, LaneLine | None]:
@@ -402,13 +412,11 @@ def detect_lanes(
     fits = [list(candidate_fits(side, region, prior)) for side, prior in zip(sides, priors, strict=True)]
     # the preferred candidate of each side first, both in one pass: when it is well supported it cannot be beaten
     # clearly, and the others need no scan; the others of the sides that still need them in a second pass
-    heads = ridge_lines(maps, region, fits[0][:1] + fits[1][:1], lane_width, [False] * len(fits[0][:1]) + [True] * len(fits[1][:1]))
-    scanned = [heads[: len(fits[0][:1])], heads[len(fits[0][:1]) :]]
+    scanned = _scan_sides(maps, region, [f[:1] for f in fits], lane_width)
     rest = [bool(s) and s[0][1] * plain < PREFER_SHARE and len(f) > 1 for s, f in zip(scanned, fits, strict=True)]
     if any(rest):
-        tails = [f[1:] if more else [] for f, more in zip(fits, rest, strict=True)]
-        more = ridge_lines(maps, region, tails[0] + tails[1], lane_width, [False] * len(tails[0]) + [True] * len(tails[1]))
-        scanned = [scanned[0] + more[: len(tails[0])], scanned[1] + more[len(tails[0]) :]]
+        more = _scan_sides(maps, region, [f[1:] if r else [] for f, r in zip(fits, rest, strict=True)], lane_width)
+        scanned = [a + b for a, b in zip(scanned, more, strict=True)]
     found: list[list[LaneLine]] = [[], []]
     for i, results in enumerate(scanned):
         for (a, b), support in results:
