@@ -245,3 +245,52 @@ def test_the_interior_stops_at_the_white_edge_line_where_the_fit_strays_beyond_i
     walled = gl.lane_interior(lanes, grid, region, LANE, white)
     assert not (walled & (lateral[band] < -h)).any()
     assert walled[lateral[band] > 0].any()  # the lane itself stays
+
+
+@pytest.mark.parametrize("light", [(0.75, 1.3, 0.85), (1.2, 0.7, 1.15), (0.7, 1.0, 1.3)], ids=["green", "purple", "warm"])
+def test_under_a_tinted_light_the_paint_is_judged_by_its_own_colour(light: tuple[float, float, float]) -> None:
+    """Domain randomisation's tints: the plain colour thresholds see neither paint; judged under the light measured
+    off the paint (vision/paint_light.py), both boundaries are back and the aim is the lane centre."""
+    frames = [np.clip(taped_floor(0.8, seed=k).astype(np.float64) * np.array(light), 0, 255).astype(np.uint8) for k in range(4)]
+    p = prepare(frames[0], CAMERA)
+    light_px = gl.smoothed_light(p.hls)
+    r = p.region
+    plain_white, plain_yellow, _ = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px)
+    white, yellow, gains = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    assert gains is not None and not np.allclose(gains, 1.0)
+    more_white = np.count_nonzero(white) > 3 * max(1, np.count_nonzero(plain_white))
+    assert more_white or np.count_nonzero(yellow) > 3 * max(1, np.count_nonzero(plain_yellow))
+    a = _settled(frames)
+    assert a.ground.left is not None and a.ground.right is not None
+    assert a.lane_confidence >= 0.7
+    assert a.steering_deg == pytest.approx(math.degrees(math.asin(LANE.aim_m / (2 * 0.8))), abs=3.0)
+
+
+def test_under_white_light_the_colours_are_judged_as_they_are() -> None:
+    p = prepare(taped_floor(0.8), CAMERA)
+    r = p.region
+    _, _, gains = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    assert gains is not None and np.all(gains == 1.0)
+
+
+def _masks(frame: np.ndarray, held: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    p = prepare(frame, CAMERA)
+    r = p.region
+    return gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work, held)
+
+
+def test_a_frame_with_one_paint_in_view_keeps_the_light_measured_before() -> None:
+    light = np.array((0.75, 1.3, 0.85))
+    both = np.clip(taped_floor(0.8).astype(np.float64) * light, 0, 255).astype(np.uint8)
+    white_only = np.clip(taped_floor(0.8, yellow=False).astype(np.float64) * light, 0, 255).astype(np.uint8)
+    _, _, measured = _masks(both, None)
+    assert measured is not None and not np.allclose(measured, 1.0)
+    alone, _, _ = _masks(white_only, None)  # one paint: this frame cannot tell the light
+    held, _, used = _masks(white_only, measured)
+    assert used is measured
+    assert np.count_nonzero(held) > 3 * max(1, np.count_nonzero(alone))
+
+
+def test_a_wrong_held_tint_loses_to_white_light_on_an_untinted_floor() -> None:
+    _, _, used = _masks(taped_floor(0.8), np.array((1.3, 0.85, 0.85)))
+    assert used is not None and np.all(used == 1.0)

@@ -159,6 +159,7 @@ class Prepared:
     gray: np.ndarray
     hls: np.ndarray
     exposure: Exposure  # of the road region
+    work: np.ndarray | None = None  # working-size BGR (the ground model judges paint colour on it)
 
 
 @dataclass(frozen=True)
@@ -180,6 +181,7 @@ class Lanes:
     expected: tuple[tuple[np.ndarray, np.ndarray], ...] | None = None  # the bending boundaries as image points (occlusion's)
     curves_px: tuple[np.ndarray | None, np.ndarray | None] | None = None  # ... as polylines in working pixels (the overlay's)
     interior: np.ndarray | None = None  # ... the lane between them, over the road rows (the road model's, the object search's)
+    hls_white: np.ndarray | None = None  # the road rows' HLS under white light, when the ground model measured a tinted one
 
 
 @dataclass(frozen=True)
@@ -206,7 +208,7 @@ def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
     gray, hls = _band_conversions(work, region)
     band = slice(region.top_v_px, region.bottom_v_px + 1)  # the mask is empty outside the road rows
     return Prepared(bgr=bgr, camera=cam, scale=fw / ww, region=region, mask=mask, gray=gray, hls=hls,
-                    exposure=road_exposure(gray[band], mask[band]))
+                    exposure=road_exposure(gray[band], mask[band]), work=work)
 
 
 def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSpec | None = None) -> Lanes:
@@ -214,7 +216,7 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
     With a ground spec: the bending ground-plane model, its boundaries drawn into the image as their near chords."""
     region = p.region
     if ground is not None:
-        fit = ground_lanes_in_image(p.hls, p.mask, region, p.camera, ground, trackers.ground.priors(t_s))
+        fit = ground_lanes_in_image(p.hls, p.mask, region, p.camera, ground, trackers.ground.priors(t_s), p.work)
         if fit is not None:
             trackers.ground.remember(t_s, fit.lanes)
             v_aim = lookahead_row(region)
@@ -222,7 +224,7 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
             return Lanes(left=fit.left, right=fit.right, seen_left=fit.left, seen_right=fit.right, agreement_left=fit.agreement[0],
                          agreement_right=fit.agreement[1], features=fit.features, paint_integral=fit.paint_integral, aim_row_px=v_aim,
                          lane_width_px=width_px, ground=fit.lanes, out_of_view=fit.out_of_view, expected=fit.expected,
-                         curves_px=fit.curves_px, interior=fit.interior)
+                         curves_px=fit.curves_px, interior=fit.interior, hls_white=fit.hls_white)
     det = detect_lanes(p.hls, region, p.mask, trackers.lanes.current(region))
     v_aim = lookahead_row(region)
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
@@ -244,19 +246,20 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
 
 def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: float, given: LeadBox | None) -> LeadAndOcclusion:
     """The lead box (a usable ``given`` one from an external detector, else detected and tracked) and the occlusion."""
+    hls = lanes.hls_white if lanes.hls_white is not None else p.hls  # colours as under white light
     expected_l, expected_r = default_lines(p.region)
     expected_l, expected_r = lanes.left or expected_l, lanes.right or expected_r
     reference = road_reference(p.gray, p.region, expected_l, expected_r)
     external = given if isinstance(given, LeadBox) and given.usable else None
     box = external
     if external is None:
-        found = detect_lead(p.gray, p.hls, p.region, expected_l, expected_r, reference)
+        found = detect_lead(p.gray, hls, p.region, expected_l, expected_r, reference)
         box = trackers.leads.update(t_s, found.scaled(p.scale) if found is not None else None)
     boxes = (box.scaled(1.0 / p.scale).as_int(),) if box is not None else ()
-    surface = surface_maps(p.gray, p.hls, lanes.features, p.region, lanes.paint_integral)
-    measured = road_appearance(p.gray, p.hls, p.region, expected_l, expected_r, surface, interior=lanes.interior)
+    surface = surface_maps(p.gray, hls, lanes.features, p.region, lanes.paint_integral)
+    measured = road_appearance(p.gray, hls, p.region, expected_l, expected_r, surface, interior=lanes.interior)
     road = trackers.road.reference(measured)
-    occ = occlusion(p.gray, p.hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface, curves=lanes.expected)
+    occ = occlusion(p.gray, hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface, curves=lanes.expected)
     trackers.road.learn(measured, occ)
     obstacle = None
     # a range needs the mounting height (without it the search is skipped). The bending lane model searches its own

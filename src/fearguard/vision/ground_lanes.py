@@ -31,6 +31,7 @@ from fearguard.vision.lane_tracker import LOST_AFTER_S
 from fearguard.vision.lanes import RIDGE_MIN, YELLOW_SAT_MIN, LaneLine, RoadRegion, smoothed_light
 from fearguard.vision.obstacle import INSET
 from fearguard.vision.occlusion import ROW_STEP
+from fearguard.vision.paint_light import balanced_hls, is_neutral, paint_gains
 
 HYPOTHESES = 48  # [-] RANSAC hypotheses per side (deterministic: a fixed-seed generator)
 INLIER_M = 0.02  # [m] a point this close to a boundary curve lies on it (tape is 2-5 cm wide)
@@ -139,6 +140,7 @@ class GroundLanes:
     right: GroundBoundary | None
     geometry: float  # [0..1] lane width against the spec (1 with one boundary)
     points: int  # marking points projected
+    light_gains: tuple[float, float, float] | None = None  # (B, G, R) gains the paint's colour was judged under (paint_light)
 
 
 @dataclass(frozen=True)
@@ -171,30 +173,53 @@ def ground_grid(camera: CameraModel, top_v_px: int, bottom_v_px: int, far_m: flo
     return GroundGrid(first, np.array(xs), np.array(lat), camera.cx_px)
 
 
-def marking_masks(hls: np.ndarray, light: np.ndarray, mask: np.ndarray, top_v_px: int, bottom_v_px: int) -> tuple[np.ndarray, np.ndarray]:
-    """(white, yellow) uint8 0/255 paint masks of the road rows. White: brighter than its surroundings along the row
-    *or* the column (tape crossing the picture on a curve is thin only vertically) and unsaturated; yellow: by colour."""
+def marking_masks(
+    hls: np.ndarray, light: np.ndarray, mask: np.ndarray, top_v_px: int, bottom_v_px: int,
+    bgr: np.ndarray | None = None, held_gains: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """(white, yellow, gains): uint8 0/255 paint masks of the road rows and the light's gains they were classified
+    under. White: brighter than its surroundings along the row *or* the column (tape crossing the picture on a curve is
+    thin only vertically) and unsaturated; yellow: by colour. With the working-size ``bgr``, colour is judged under the
+    light measured off the paint (``paint_light``), or ``held_gains`` (a previous frame's) when this frame cannot tell;
+    gains are None without ``bgr``, ones for white light."""
     white = np.zeros(mask.shape, np.uint8)
     yellow = np.zeros(mask.shape, np.uint8)
     w = mask.shape[1]
+    band = slice(top_v_px, bottom_v_px + 1)
     split = (top_v_px + bottom_v_px) // 2
+    ridged = np.zeros(mask.shape, bool)  # brighter than the surroundings, as paint is (any colour)
+    plain = np.zeros(mask.shape, bool)  # no ridge at all: the road itself
     for lo, hi, share in ((top_v_px, split, RIDGE_WINDOW[0]), (split, bottom_v_px + 1, RIDGE_WINDOW[1])):
         if hi <= lo:
             continue
-        band = light[lo:hi]
+        rows = light[lo:hi]
         k = max(3, int(share * w) | 1)
-        ridge = np.maximum(cv2.morphologyEx(band, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (k, 1))),
-                           cv2.morphologyEx(band, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (1, k))))
-        background = band.astype(np.int16) - ridge
-        hue, sat = hls[lo:hi, :, 0], hls[lo:hi, :, 2]
-        bright = (ridge >= RIDGE_MIN) & (ridge >= RIDGE_RATIO * background) & (sat <= WHITE_SAT_MAX)
-        paint = (hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]) & (sat >= YELLOW_SAT_MIN) & (band >= YELLOW_LIGHT_MIN)
-        white[lo:hi] = bright * np.uint8(255)
-        yellow[lo:hi] = paint * np.uint8(255)
+        ridge = np.maximum(cv2.morphologyEx(rows, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (k, 1))),
+                           cv2.morphologyEx(rows, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (1, k))))
+        ridged[lo:hi] = (ridge >= RIDGE_MIN) & (ridge >= RIDGE_RATIO * (rows.astype(np.int16) - ridge))
+        plain[lo:hi] = ridge < RIDGE_MIN // 2
+    on_road = mask[band] > 0
+    paint = ridged[band] & on_road
+    light_band = light[band]
+    white_b, yellow_b = _paint_colours(hls[band], light_band)
+    gains = None
+    if bgr is not None:  # judged under the light measured off the paint (this frame's, or the one held from before)
+        found = paint_gains(bgr[band], paint, plain[band] & on_road, white_b)
+        gains = found if found is not None else held_gains if held_gains is not None else np.ones(3)
+        if not is_neutral(gains):
+            white_b, yellow_b = _paint_colours(balanced_hls(bgr[band], gains), light_band)
+    white[band] = (ridged[band] & white_b) * np.uint8(255)
+    yellow[band] = yellow_b * np.uint8(255)
     # an opening removes specks (grass blades, the mat's grain) that no tape is as thin as
     speck = cv2.getStructuringElement(cv2.MORPH_RECT, (3, 3))
     return (cv2.bitwise_and(cv2.morphologyEx(white, cv2.MORPH_OPEN, speck), mask),
-            cv2.bitwise_and(cv2.morphologyEx(yellow, cv2.MORPH_OPEN, speck), mask))
+            cv2.bitwise_and(cv2.morphologyEx(yellow, cv2.MORPH_OPEN, speck), mask), gains)
+
+
+def _paint_colours(hls: np.ndarray, light: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(white-coloured, yellow) bool masks by colour alone: unsaturated; yellow hue, saturated and not dark."""
+    hue, sat = hls[..., 0], hls[..., 2]
+    return sat <= WHITE_SAT_MAX, (hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]) & (sat >= YELLOW_SAT_MIN) & (light >= YELLOW_LIGHT_MIN)
 
 
 def inner_edges(paint: np.ndarray, lane_is_right: bool) -> np.ndarray:
@@ -399,19 +424,23 @@ def agreement(now: GroundBoundary | None, before: GroundBoundary | None, spec: G
 
 class GroundMemory:
     """Last frame's boundaries, each kept as the prior (the gate of its points) until LOST_AFTER_S unseen (the image
-    tracks' limit)."""
+    tracks' limit), and the light's last gains (kept until a frame measures new ones: the light's colour changes
+    slowly, and a frame with one paint in view cannot measure it)."""
 
     def __init__(self) -> None:
         self._last: list[tuple[float, GroundBoundary] | None] = [None, None]
+        self._gains: tuple[float, float, float] | None = None
 
     def priors(self, t_s: float) -> GroundLanes | None:
         kept = [b if b is not None and t_s - b[0] <= LOST_AFTER_S else None for b in self._last]
-        return GroundLanes(kept[0][1] if kept[0] else None, kept[1][1] if kept[1] else None, 1.0, 0)
+        return GroundLanes(kept[0][1] if kept[0] else None, kept[1][1] if kept[1] else None, 1.0, 0, self._gains)
 
     def remember(self, t_s: float, lanes: GroundLanes) -> None:
         for i, b in enumerate((lanes.left, lanes.right)):
             if b is not None:
                 self._last[i] = (t_s, b)
+        if lanes.light_gains is not None:
+            self._gains = lanes.light_gains
 
 
 @dataclass(frozen=True)
@@ -429,21 +458,27 @@ class GroundFit:
     curves_px: tuple[np.ndarray | None, np.ndarray | None]  # each boundary as an image polyline (n, 2: u, v), for the overlay
     interior: np.ndarray | None = None  # bool over the road rows: pixels whose ground lies inside the lane, inset from its
     #   boundaries, as far as the markings were seen (the road model's samples, the object search)
+    hls_white: np.ndarray | None = None  # the HLS image under white light when a tinted one was measured (paint_light)
 
 
 def ground_lanes_in_image(
     hls: np.ndarray, mask: np.ndarray, region: RoadRegion, camera: CameraModel, spec: GroundLaneSpec, priors: GroundLanes | None,
+    bgr: np.ndarray | None = None,
 ) -> GroundFit | None:
-    """The ground model on a working-size HLS image. None when the camera cannot see the fit range."""
+    """The ground model on a working-size HLS image (and its BGR, to judge colour under white light: paint_light).
+    None when the camera cannot see the fit range."""
     cam = camera.scaled_to(region.width_px, region.height_px)
     grid = ground_grid(cam, region.top_v_px, region.bottom_v_px, spec.far_m)
     if grid is None:
         return None
     light = smoothed_light(hls)
-    white, yellow = marking_masks(hls, light, mask, region.top_v_px, region.bottom_v_px)
-    features = cv2.bitwise_or(white, yellow)
     before = priors if priors is not None else GroundLanes(None, None, 1.0, 0)
+    held = np.array(before.light_gains) if before.light_gains is not None else None
+    white, yellow, gains = marking_masks(hls, light, mask, region.top_v_px, region.bottom_v_px, bgr, held)
+    features = cv2.bitwise_or(white, yellow)
     lanes = detect_ground_lanes(white, yellow, grid, region.bottom_v_px, spec, (before.left, before.right))
+    if gains is not None:
+        lanes = replace(lanes, light_gains=(float(gains[0]), float(gains[1]), float(gains[2])))
     band = slice(region.top_v_px, region.bottom_v_px + 1)
     integral = cv2.integral((features[band] > 0).view(np.uint8), sdepth=cv2.CV_64F)
     left, right = (_image_chord(b, cam) for b in (lanes.left, lanes.right))
@@ -451,8 +486,12 @@ def ground_lanes_in_image(
     hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid),
               lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid))
     curves = tuple(_image_polyline(b, cam, spec) for b in (lanes.left, lanes.right))
+    hls_white = None
+    if bgr is not None and gains is not None and not is_neutral(gains):
+        hls_white = hls.copy()
+        hls_white[band] = balanced_hls(bgr[band], gains)
     return GroundFit(lanes, left, right, agree, features, integral, hidden, expected_points(lanes, cam, region, spec),
-                     (curves[0], curves[1]), lane_interior(lanes, grid, region, spec, white[band] > 0))
+                     (curves[0], curves[1]), lane_interior(lanes, grid, region, spec, white[band] > 0), hls_white)
 
 
 def _image_polyline(boundary: GroundBoundary | None, camera: CameraModel, spec: GroundLaneSpec) -> np.ndarray | None:

@@ -1,0 +1,86 @@
+"""The light's colour, read off the paint: per-channel gains that turn the white tape grey again.
+
+Under a coloured light (a warm lamp, a tinted window, gym-duckietown's domain randomisation) white tape is no longer
+unsaturated and yellow paint's hue moves, so fixed colour thresholds find neither. Each channel is scaled by the
+light (von Kries); dividing by the colour of the white tape — the light's colour — gives the paint its own colours back.
+
+Which pixels are the white tape: among the bright marking-like pixels (ridges) the two paints differ most in blue
+against red and green — yellow reflects almost no blue, white all of it — and their ratio is the paints' own whatever
+the light. So the log-chroma b = log(B / √(G·R)) of those pixels is split in two by Otsu's threshold, and the bluer
+class is the white tape when the split is clear: classes at least SPLIT_MIN apart, each a plausible share. The gains
+are kept only if they leave the plain road no less grey than it was (a mat or asphalt is near grey under the same
+light): that rejects a split of yellow into pale and saturated dashes with no white tape in view. Gains within
+DEAD_BAND of 1 are 1, and so are they when the plain colours already call WHITE_EXPLAINED of the white class white:
+then the light is white enough, and a lighter tile or pale dashes taken for the white class tint nothing. A frame
+that cannot tell (one paint in view) keeps the light measured before (ground_lanes.GroundMemory).
+
+Written by hand (a 64-bin histogram and a few sums): OpenCV's white balance (xphoto) is not in the opencv-python
+wheels, and it balances on the whole picture (grass, sky, walls) rather than on the paint.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+MIN_PIXELS = 50  # [-] fewer bright ridge pixels than this: no estimate (nothing painted in view)
+SPLIT_MIN = 0.6  # [log-chroma] the two paints' classes must be this far apart (Duckietown's: 0.9-1.4; one paint: < 0.5)
+SHARE_RANGE = (0.1, 0.9)  # [-] the white class's share of the bright ridge pixels (both paints in view)
+GREY_TOLERANCE = 0.05  # [-] the gains may raise the road's channel spread by at most this
+DEAD_BAND = 0.1  # [-] gains this close to 1 are 1
+WHITE_EXPLAINED = 0.5  # [-] the plain colours call this share of the white class white: the light is white enough
+BINS, B_RANGE = 64, (-3.0, 1.5)  # histogram of b (Duckietown's yellow: -2 ... -1.2, white: -0.9 ... -0.3)
+
+
+def _spread(bgr: np.ndarray) -> float:
+    """Channel spread of a colour, (max − min) / mean: 0 for grey."""
+    return float((bgr.max() - bgr.min()) / max(float(bgr.mean()), 1e-9))
+
+
+def _otsu(values: np.ndarray) -> tuple[float, float, float]:
+    """Otsu's split of values: (threshold, distance between the two class means, share above the threshold)."""
+    hist, edges = np.histogram(np.clip(values, *B_RANGE), bins=BINS, range=B_RANGE)  # outliers in the end bins
+    centres = (edges[:-1] + edges[1:]) / 2
+    below = np.cumsum(hist)[:-1]
+    total = float(hist.sum())
+    above = total - below
+    sums = np.cumsum(hist * centres)[:-1]
+    mean_below = sums / np.maximum(below, 1)
+    mean_above = (float((hist * centres).sum()) - sums) / np.maximum(above, 1)
+    k = int(np.argmax(below * above * (mean_above - mean_below) ** 2))
+    return float(edges[k + 1]), float(mean_above[k] - mean_below[k]), float(above[k] / max(total, 1.0))
+
+
+def paint_gains(bgr: np.ndarray, paint: np.ndarray, road: np.ndarray, looks_white: np.ndarray) -> np.ndarray | None:
+    """(B, G, R) gains that make the white paint grey, from the bright marking-like pixels ``paint`` and the plain road
+    ``road`` (bool masks over the BGR image); ones when the plain colours already call most of the white class white
+    (``looks_white``: unsaturated as it is); None when this frame cannot tell (one paint, too few pixels, a split that
+    would tint the road)."""
+    px = bgr[paint].astype(np.float64) + 1.0
+    ground = bgr[road]
+    if len(px) < MIN_PIXELS or len(ground) < MIN_PIXELS:
+        return None
+    b = np.log(px[:, 0] / np.sqrt(px[:, 1] * px[:, 2]))
+    threshold, split, share = _otsu(b)
+    if split < SPLIT_MIN or not SHARE_RANGE[0] <= share <= SHARE_RANGE[1]:
+        return None
+    whites = b > threshold
+    if np.count_nonzero(looks_white[paint][whites]) >= WHITE_EXPLAINED * np.count_nonzero(whites):
+        return np.ones(3)  # white light explains the white class
+    light = np.median(px[whites], axis=0)
+    gains = light.mean() / light
+    road_colour = np.median(ground, axis=0).astype(np.float64) + 1.0
+    if _spread(road_colour * gains) > _spread(road_colour) + GREY_TOLERANCE:
+        return None
+    return np.ones(3) if float(np.max(np.abs(gains - 1.0))) < DEAD_BAND else gains
+
+
+def is_neutral(gains: np.ndarray | None) -> bool:
+    """True when the gains change nothing (none estimated, or all 1)."""
+    return gains is None or bool(np.all(gains == 1.0))
+
+
+def balanced_hls(bgr: np.ndarray, gains: np.ndarray) -> np.ndarray:
+    """HLS of the BGR image under white light: each channel scaled by its gain (clipped to 255)."""
+    scaled = cv2.multiply(bgr, (*(float(g) for g in gains), 1.0), dtype=cv2.CV_8U)  # rounds, saturates at 255
+    return cv2.cvtColor(scaled, cv2.COLOR_BGR2HLS)

@@ -1,0 +1,94 @@
+"""The light's colour read off the paint (vision/paint_light.py): gains that make white tape grey under any tint."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fearguard.vision import paint_light as pl
+from fearguard.vision.ground_lanes import WHITE_SAT_MAX, YELLOW_HUE
+
+# BGR under white light (no channel clips under the tints)
+WHITE, YELLOW, MAT = (185.0, 185.0, 185.0), (20.0, 170.0, 185.0), (55.0, 55.0, 55.0)
+
+
+def _scene(
+    light: tuple[float, float, float], white: bool = True, yellow: bool = True, seed: int = 0,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A 60×120 patch of mat with a white and a yellow stripe, lit by ``light`` (BGR factors): (bgr, paint, road)."""
+    rng = np.random.default_rng(seed)
+    base = np.tile(np.array(MAT), (60, 120, 1)) + rng.normal(0.0, 2.0, (60, 120, 3))
+    paint = np.zeros((60, 120), bool)
+    if white:
+        base[:, 80:95] = WHITE
+        paint[:, 80:95] = True
+    if yellow:
+        base[:, 20:30] = YELLOW
+        paint[:, 20:30] = True
+    bgr = np.clip(base * np.array(light), 0, 255).astype(np.uint8)
+    return bgr, paint, ~paint
+
+
+def _gains(bgr: np.ndarray, paint: np.ndarray, road: np.ndarray) -> np.ndarray | None:
+    hls = cv2.cvtColor(bgr, cv2.COLOR_BGR2HLS)
+    return pl.paint_gains(bgr, paint, road, hls[..., 2] <= WHITE_SAT_MAX)
+
+
+lights = st.tuples(*[st.floats(0.65, 1.35)] * 3)
+
+
+@settings(max_examples=60, deadline=None)
+@given(lights)
+def test_under_any_tint_the_gains_make_the_white_tape_grey_and_the_yellow_yellow(light: tuple[float, float, float]) -> None:
+    bgr, paint, road = _scene(light)
+    gains = _gains(bgr, paint, road)
+    assert gains is not None
+    if pl.is_neutral(gains):  # a light within the dead band: the plain thresholds see the paint as it is
+        assert max(light) / min(light) < 1.25
+        return
+    hls = pl.balanced_hls(bgr, gains)
+    assert np.median(hls[:, 80:95, 2]) <= WHITE_SAT_MAX
+    hue = np.median(hls[:, 20:30, 0])
+    assert YELLOW_HUE[0] <= hue <= YELLOW_HUE[1]
+
+
+def test_a_white_light_changes_nothing() -> None:
+    bgr, paint, road = _scene((1.0, 1.0, 1.0))
+    assert pl.is_neutral(_gains(bgr, paint, road))
+
+
+def test_a_green_light_is_measured_as_green() -> None:
+    bgr, paint, road = _scene((0.8, 1.25, 0.85))
+    gains = _gains(bgr, paint, road)
+    assert gains is not None
+    assert gains[1] < gains[0] and gains[1] < gains[2]  # green is turned down
+    np.testing.assert_allclose(gains * np.array((0.8, 1.25, 0.85)), np.full(3, np.mean(gains * np.array((0.8, 1.25, 0.85)))), rtol=0.05)
+
+
+def test_one_paint_in_view_cannot_tell_the_light() -> None:
+    for white, yellow in ((True, False), (False, True)):
+        bgr, paint, road = _scene((0.8, 1.25, 0.85), white=white, yellow=yellow)
+        assert _gains(bgr, paint, road) is None
+
+
+def test_a_split_that_would_tint_the_grey_road_is_refused() -> None:
+    """Pale and saturated yellow dashes, no white tape, on a grey mat: 'balancing' the pale ones to grey tints the mat."""
+    rng = np.random.default_rng(1)
+    bgr = np.clip(np.tile(np.array(MAT), (60, 120, 1)) + rng.normal(0, 2, (60, 120, 3)), 0, 255)
+    bgr[:, 20:30] = YELLOW
+    bgr[:, 80:95] = (150.0, 200.0, 215.0)  # pale yellow
+    paint = np.zeros((60, 120), bool)
+    paint[:, 20:30] = paint[:, 80:95] = True
+    assert pl.is_neutral(_gains(bgr.astype(np.uint8), paint, ~paint))  # no estimate, or white light: no tint either way
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 255), st.integers(1, 40), st.integers(1, 40), st.integers(0, 2**31 - 1))
+def test_the_estimate_never_raises_on_any_picture(fill: int, h: int, w: int, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    bgr = rng.integers(0, 256, (h, w, 3), dtype=np.uint8) if fill % 2 else np.full((h, w, 3), fill, np.uint8)
+    paint = rng.random((h, w)) < 0.5
+    gains = _gains(bgr, paint, ~paint)
+    assert gains is None or (gains.shape == (3,) and np.all(np.isfinite(gains)) and np.all(gains > 0))
