@@ -187,8 +187,7 @@ def marking_masks(
     w = mask.shape[1]
     band = slice(top_v_px, bottom_v_px + 1)
     split = (top_v_px + bottom_v_px) // 2
-    ridged = np.zeros(mask.shape, bool)  # brighter than the surroundings, as paint is (any colour)
-    plain = np.zeros(mask.shape, bool)  # no ridge at all: the road itself
+    ridged = np.zeros((bottom_v_px + 1 - top_v_px, w), bool)  # road rows brighter than their surroundings, as paint is
     for lo, hi, share in ((top_v_px, split, RIDGE_WINDOW[0]), (split, bottom_v_px + 1, RIDGE_WINDOW[1])):
         if hi <= lo:
             continue
@@ -196,19 +195,17 @@ def marking_masks(
         k = max(3, int(share * w) | 1)
         ridge = np.maximum(cv2.morphologyEx(rows, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (k, 1))),
                            cv2.morphologyEx(rows, cv2.MORPH_TOPHAT, cv2.getStructuringElement(cv2.MORPH_RECT, (1, k))))
-        ridged[lo:hi] = (ridge >= RIDGE_MIN) & (ridge >= RIDGE_RATIO * (rows.astype(np.int16) - ridge))
-        plain[lo:hi] = ridge < RIDGE_MIN // 2
-    on_road = mask[band] > 0
-    paint = ridged[band] & on_road
+        ridged[lo - top_v_px : hi - top_v_px] = (ridge >= RIDGE_MIN) & (ridge >= RIDGE_RATIO * (rows.astype(np.int16) - ridge))
     light_band = light[band]
     white_b, yellow_b = _paint_colours(hls[band], light_band)
     gains = None
     if bgr is not None:  # judged under the light measured off the paint (this frame's, or the one held from before)
-        found = paint_gains(bgr[band], paint, plain[band] & on_road, white_b)
+        on_road = mask[band] > 0
+        found = paint_gains(bgr[band], ridged & on_road, on_road, white_b)
         gains = found if found is not None else held_gains if held_gains is not None else np.ones(3)
         if not is_neutral(gains):
             white_b, yellow_b = _paint_colours(balanced_hls(bgr[band], gains), light_band)
-    white[band] = (ridged[band] & white_b) * np.uint8(255)
+    white[band] = (ridged & white_b) * np.uint8(255)
     yellow[band] = yellow_b * np.uint8(255)
     # an opening removes specks (grass blades, the mat's grain) that no tape is as thin as
     speck = cv2.getStructuringElement(cv2.MORPH_RECT, (3, 3))

@@ -23,7 +23,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-MIN_PIXELS = 50  # [-] fewer bright ridge pixels than this: no estimate (nothing painted in view)
+MIN_PIXELS = 50  # [-] fewer bright ridge pixels than this (of every 4th pixel): no estimate (nothing painted in view)
 SPLIT_MIN = 0.6  # [log-chroma] the two paints' classes must be this far apart (Duckietown's: 0.9-1.4; one paint: < 0.5)
 SHARE_RANGE = (0.1, 0.9)  # [-] the white class's share of the bright ridge pixels (both paints in view)
 GREY_TOLERANCE = 0.05  # [-] the gains may raise the road's channel spread by at most this
@@ -38,9 +38,12 @@ def _spread(bgr: np.ndarray) -> float:
 
 
 def _otsu(values: np.ndarray) -> tuple[float, float, float]:
-    """Otsu's split of values: (threshold, distance between the two class means, share above the threshold)."""
-    hist, edges = np.histogram(np.clip(values, *B_RANGE), bins=BINS, range=B_RANGE)  # outliers in the end bins
-    centres = (edges[:-1] + edges[1:]) / 2
+    """Otsu's split of values (binned over B_RANGE, outliers in the end bins): (threshold, distance between the two
+    class means, share above the threshold)."""
+    lo, hi = B_RANGE
+    width = (hi - lo) / BINS
+    hist = np.bincount(np.clip(((values - lo) / width).astype(np.int64), 0, BINS - 1), minlength=BINS).astype(np.float64)
+    centres = lo + width * (np.arange(BINS) + 0.5)
     below = np.cumsum(hist)[:-1]
     total = float(hist.sum())
     above = total - below
@@ -48,17 +51,17 @@ def _otsu(values: np.ndarray) -> tuple[float, float, float]:
     mean_below = sums / np.maximum(below, 1)
     mean_above = (float((hist * centres).sum()) - sums) / np.maximum(above, 1)
     k = int(np.argmax(below * above * (mean_above - mean_below) ** 2))
-    return float(edges[k + 1]), float(mean_above[k] - mean_below[k]), float(above[k] / max(total, 1.0))
+    return lo + width * (k + 1), float(mean_above[k] - mean_below[k]), float(above[k] / max(total, 1.0))
 
 
-def paint_gains(bgr: np.ndarray, paint: np.ndarray, road: np.ndarray, looks_white: np.ndarray) -> np.ndarray | None:
-    """(B, G, R) gains that make the white paint grey, from the bright marking-like pixels ``paint`` and the plain road
-    ``road`` (bool masks over the BGR image); ones when the plain colours already call most of the white class white
-    (``looks_white``: unsaturated as it is); None when this frame cannot tell (one paint, too few pixels, a split that
-    would tint the road)."""
+def paint_gains(bgr: np.ndarray, paint: np.ndarray, on_road: np.ndarray, looks_white: np.ndarray) -> np.ndarray | None:
+    """(B, G, R) gains that make the white paint grey, from the bright marking-like pixels ``paint`` and the rest of
+    the road ``on_road`` (bool masks over the BGR image; every 4th pixel is used); ones when the plain colours already
+    call most of the white class white (``looks_white``: unsaturated as it is); None when this frame cannot tell (one
+    paint, too few pixels, a split that would tint the road)."""
+    bgr, paint, on_road, looks_white = bgr[::2, ::2], paint[::2, ::2], on_road[::2, ::2], looks_white[::2, ::2]
     px = bgr[paint].astype(np.float64) + 1.0
-    ground = bgr[road]
-    if len(px) < MIN_PIXELS or len(ground) < MIN_PIXELS:
+    if len(px) < MIN_PIXELS:
         return None
     b = np.log(px[:, 0] / np.sqrt(px[:, 1] * px[:, 2]))
     threshold, split, share = _otsu(b)
@@ -67,6 +70,9 @@ def paint_gains(bgr: np.ndarray, paint: np.ndarray, road: np.ndarray, looks_whit
     whites = b > threshold
     if np.count_nonzero(looks_white[paint][whites]) >= WHITE_EXPLAINED * np.count_nonzero(whites):
         return np.ones(3)  # white light explains the white class
+    ground = bgr[on_road & ~paint]
+    if len(ground) < MIN_PIXELS:
+        return None
     light = np.median(px[whites], axis=0)
     gains = light.mean() / light
     road_colour = np.median(ground, axis=0).astype(np.float64) + 1.0
