@@ -219,7 +219,10 @@ def test_the_lane_interior_follows_the_curve_and_keeps_off_the_tape(radius: floa
     assert inside[lane_near].mean() > 0.9  # and it covers the lane's middle ahead
 
 
-@pytest.mark.parametrize(("radius", "colour"), [(math.inf, (0, 90, 240)), (0.45, (0, 90, 240)), (math.inf, (40, 215, 250))])
+@pytest.mark.parametrize(
+    ("radius", "colour"),
+    [(math.inf, (0, 90, 240)), (0.45, (0, 90, 240)), (math.inf, (40, 215, 250)), (0.45, (40, 215, 250)), (0.8, (40, 215, 250))],
+)
 def test_an_object_in_the_lane_of_a_bending_model_is_seen_at_its_range(radius: float, colour: tuple[int, int, int]) -> None:
     """Without a range sensor the camera is the only eye: an object standing in the lane (an orange cone, a yellow
     duck), on a straight or a curve, is found and ranged from the row it stands on; the clean lane has none."""
@@ -294,3 +297,34 @@ def test_a_frame_with_one_paint_in_view_keeps_the_light_measured_before() -> Non
 def test_a_wrong_held_tint_loses_to_white_light_on_an_untinted_floor() -> None:
     _, _, used = _masks(taped_floor(0.8), np.array((1.3, 0.85, 0.85)))
     assert used is not None and np.all(used == 1.0)
+
+
+def _yellow(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(yellow paint mask as marking_masks finds it, the same without the blobs that stand up), over the fit range's
+    rows (the only ones the fit uses, and the only ones judged)."""
+    p = prepare(frame, CAMERA)
+    r = p.region
+    _, yellow, _ = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    grid = gl.ground_grid(CAMERA, r.top_v_px, r.bottom_v_px, LANE.far_m)
+    rows = slice(grid.top_v_px, r.bottom_v_px + 1)
+    return yellow[rows], gl.flat_paint(yellow, grid, r.bottom_v_px)[rows]
+
+
+@pytest.mark.parametrize("radius", [math.inf, 0.8, 0.45, -0.45])
+def test_flat_paint_keeps_every_painted_line(radius: float) -> None:
+    yellow, flat = _yellow(taped_floor(radius))
+    assert np.count_nonzero(yellow) > 100
+    assert np.array_equal(flat, yellow)
+
+
+@pytest.mark.parametrize("radius", [math.inf, 0.45])
+def test_a_yellow_object_standing_in_the_lane_is_no_centre_line(radius: float) -> None:
+    """A toy duck is yellow like the centre line: seen as paint it became the left boundary on a curve and the object
+    search passed it by. Its rows, read as flat ground, span far more ground than paint does: it is taken out."""
+    tape, _ = _yellow(taped_floor(radius))
+    yellow, flat = _yellow(taped_floor(radius, cone_at_m=0.3, cone_bgr=(40, 215, 250)))
+    duck = (yellow > 0) & (tape == 0)
+    assert np.count_nonzero(duck) > 100
+    assert np.count_nonzero(flat[duck]) <= 0.1 * np.count_nonzero(duck)
+    kept = (tape > 0) & (yellow > 0)
+    assert np.count_nonzero(flat[kept]) >= 0.9 * np.count_nonzero(kept)

@@ -213,6 +213,35 @@ def marking_masks(
             cv2.bitwise_and(cv2.morphologyEx(yellow, cv2.MORPH_OPEN, speck), mask), gains)
 
 
+STANDING_DEPTH_M = 0.15  # [m] a yellow blob whose rows span more ground than this (read as flat) ...
+STANDING_WIDTH_M = 0.04  # [m] ... and whose rows are this wide (median, read as flat) stands up: a toy duck 5 cm tall
+#   and 5 cm wide 0.3 m ahead spans 0.2 m of the fit range, its rows 5-9 cm wide; a centre-line dash spans its length
+#   (5 cm), a solid line 2.5 cm tape (wider only where it runs across the rows, over a short span)
+
+
+def flat_paint(yellow: np.ndarray, grid: GroundGrid, bottom_v_px: int) -> np.ndarray:
+    """The yellow mask without blobs that stand up. Paint is flat: read as flat ground, a marking's rows span its own
+    length and its tape width. A yellow object standing in the lane (a toy duck) keeps its width in pixels while its
+    upper rows, read as flat, lie far beyond its foot, where a pixel is more ground: it spans much ground and is wide.
+    It is no centre line (it would become the left boundary, and the lane interior would pass it by): it is left to
+    the object search. Only the fit range's rows are judged."""
+    band = yellow[grid.top_v_px : bottom_v_px + 1]
+    n, labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8)
+    out = yellow
+    for i in range(1, n):
+        left, top, width, height = (int(v) for v in stats[i, :4])
+        foot = top + height - 1  # band row of its lowest pixel
+        if float(grid.x_m[top] - grid.x_m[foot]) <= STANDING_DEPTH_M:
+            continue
+        mine = labels[top : foot + 1, left : left + width] == i
+        widths = mine.sum(axis=1) * grid.lateral_m_per_px[top : foot + 1]
+        if float(np.median(widths)) >= STANDING_WIDTH_M:
+            if out is yellow:
+                out = yellow.copy()
+            out[grid.top_v_px + top : grid.top_v_px + foot + 1, left : left + width][mine] = 0
+    return out
+
+
 def _paint_colours(hls: np.ndarray, light: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(white-coloured, yellow) bool masks by colour alone: unsaturated; yellow hue, saturated and not dark."""
     hue, sat = hls[..., 0], hls[..., 2]
@@ -472,6 +501,7 @@ def ground_lanes_in_image(
     before = priors if priors is not None else GroundLanes(None, None, 1.0, 0)
     held = np.array(before.light_gains) if before.light_gains is not None else None
     white, yellow, gains = marking_masks(hls, light, mask, region.top_v_px, region.bottom_v_px, bgr, held)
+    yellow = flat_paint(yellow, grid, region.bottom_v_px)
     features = cv2.bitwise_or(white, yellow)
     lanes = detect_ground_lanes(white, yellow, grid, region.bottom_v_px, spec, (before.left, before.right))
     if gains is not None:
