@@ -162,3 +162,13 @@ def test_without_a_range_sensor_the_guarded_robot_stops_for_a_duck_and_goes_on(t
     ob = s["obstacle"]
     assert not ob["contact"] and ob["stopped_before_contact"] and ob["went_on"]
     assert s["collisions"] == 0 and s["departures"] == 0
+
+
+def test_on_a_curve_the_duck_is_no_centre_line_and_the_robot_stops_once_well_short(tmp_path: Path) -> None:
+    """On loop_empty's first curve a yellow duck read as paint became the left boundary: the search passed it by and
+    the robot drove on toward it and stopped again 0.08 m short. Standing up, it is an object (ground_lanes.flat_paint)."""
+    s = drive(DriveOptions("loop_empty", seconds=12, obstacle="duck", plots=False), tmp_path).summary
+    ob = s["obstacle"]
+    assert not ob["contact"] and ob["stopped_before_contact"] and ob["went_on"]
+    assert ob["min_gap_m"] >= 0.2
+    assert s["collisions"] == 0 and s["departures"] == 0
