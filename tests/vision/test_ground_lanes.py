@@ -258,8 +258,8 @@ def test_under_a_tinted_light_the_paint_is_judged_by_its_own_colour(light: tuple
     p = prepare(frames[0], CAMERA)
     light_px = gl.smoothed_light(p.hls)
     r = p.region
-    plain_white, plain_yellow, _ = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px)
-    white, yellow, gains = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    plain_white, plain_yellow, _, _ = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px)
+    white, yellow, gains, _ = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px, p.work)
     assert gains is not None and not np.allclose(gains, 1.0)
     more_white = np.count_nonzero(white) > 3 * max(1, np.count_nonzero(plain_white))
     assert more_white or np.count_nonzero(yellow) > 3 * max(1, np.count_nonzero(plain_yellow))
@@ -272,14 +272,14 @@ def test_under_a_tinted_light_the_paint_is_judged_by_its_own_colour(light: tuple
 def test_under_white_light_the_colours_are_judged_as_they_are() -> None:
     p = prepare(taped_floor(0.8), CAMERA)
     r = p.region
-    _, _, gains = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    _, _, gains, _ = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
     assert gains is not None and np.all(gains == 1.0)
 
 
 def _masks(frame: np.ndarray, held: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     p = prepare(frame, CAMERA)
     r = p.region
-    return gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work, held)
+    return gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work, held)[:3]
 
 
 def test_a_frame_with_one_paint_in_view_keeps_the_light_measured_before() -> None:
@@ -304,7 +304,7 @@ def _yellow(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     rows (the only ones the fit uses, and the only ones judged)."""
     p = prepare(frame, CAMERA)
     r = p.region
-    _, yellow, _ = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    _, yellow, _, _ = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
     grid = gl.ground_grid(CAMERA, r.top_v_px, r.bottom_v_px, LANE.far_m)
     rows = slice(grid.top_v_px, r.bottom_v_px + 1)
     return yellow[rows], gl.flat_paint(yellow, grid, r.bottom_v_px)[rows]

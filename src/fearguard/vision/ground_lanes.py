@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -173,15 +174,23 @@ def ground_grid(camera: CameraModel, top_v_px: int, bottom_v_px: int, far_m: flo
     return GroundGrid(first, np.array(xs), np.array(lat), camera.cx_px)
 
 
+class PaintMasks(NamedTuple):
+    """The paint of the road rows and the light it was judged under."""
+
+    white: np.ndarray  # uint8 0/255
+    yellow: np.ndarray  # uint8 0/255
+    gains: np.ndarray | None  # (B, G, R) gains of the light (paint_light): None without the BGR image, ones for white light
+    hls_white: np.ndarray | None  # the HLS image with its road rows as under white light, when the light was tinted
+
+
 def marking_masks(
     hls: np.ndarray, light: np.ndarray, mask: np.ndarray, top_v_px: int, bottom_v_px: int,
     bgr: np.ndarray | None = None, held_gains: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """(white, yellow, gains): uint8 0/255 paint masks of the road rows and the light's gains they were classified
-    under. White: brighter than its surroundings along the row *or* the column (tape crossing the picture on a curve is
-    thin only vertically) and unsaturated; yellow: by colour. With the working-size ``bgr``, colour is judged under the
-    light measured off the paint (``paint_light``), or ``held_gains`` (a previous frame's) when this frame cannot tell;
-    gains are None without ``bgr``, ones for white light."""
+) -> PaintMasks:
+    """Paint masks of the road rows and the light they were judged under. White: brighter than its surroundings
+    along the row *or* the column (tape crossing the picture on a curve is thin only vertically) and unsaturated;
+    yellow: by colour. With the working-size ``bgr``, colour is judged under the light measured off the paint
+    (``paint_light``), or ``held_gains`` (a previous frame's) when this frame cannot tell."""
     white = np.zeros(mask.shape, np.uint8)
     yellow = np.zeros(mask.shape, np.uint8)
     w = mask.shape[1]
@@ -198,19 +207,21 @@ def marking_masks(
         ridged[lo - top_v_px : hi - top_v_px] = (ridge >= RIDGE_MIN) & (ridge >= RIDGE_RATIO * (rows.astype(np.int16) - ridge))
     light_band = light[band]
     white_b, yellow_b = _paint_colours(hls[band], light_band)
-    gains = None
+    gains, hls_white = None, None
     if bgr is not None:  # judged under the light measured off the paint (this frame's, or the one held from before)
         on_road = mask[band] > 0
         found = paint_gains(bgr[band], ridged & on_road, on_road, white_b)
         gains = found if found is not None else held_gains if held_gains is not None else np.ones(3)
         if not is_neutral(gains):
-            white_b, yellow_b = _paint_colours(balanced_hls(bgr[band], gains), light_band)
+            hls_white = hls.copy()
+            hls_white[band] = balanced_hls(bgr[band], gains)
+            white_b, yellow_b = _paint_colours(hls_white[band], light_band)
     white[band] = (ridged & white_b) * np.uint8(255)
     yellow[band] = yellow_b * np.uint8(255)
     # an opening removes specks (grass blades, the mat's grain) that no tape is as thin as
     speck = cv2.getStructuringElement(cv2.MORPH_RECT, (3, 3))
-    return (cv2.bitwise_and(cv2.morphologyEx(white, cv2.MORPH_OPEN, speck), mask),
-            cv2.bitwise_and(cv2.morphologyEx(yellow, cv2.MORPH_OPEN, speck), mask), gains)
+    return PaintMasks(cv2.bitwise_and(cv2.morphologyEx(white, cv2.MORPH_OPEN, speck), mask),
+                      cv2.bitwise_and(cv2.morphologyEx(yellow, cv2.MORPH_OPEN, speck), mask), gains, hls_white)
 
 
 STANDING_DEPTH_M = 0.15  # [m] a yellow blob whose rows span more ground than this (read as flat) ...
@@ -500,7 +511,7 @@ def ground_lanes_in_image(
     light = smoothed_light(hls)
     before = priors if priors is not None else GroundLanes(None, None, 1.0, 0)
     held = np.array(before.light_gains) if before.light_gains is not None else None
-    white, yellow, gains = marking_masks(hls, light, mask, region.top_v_px, region.bottom_v_px, bgr, held)
+    white, yellow, gains, hls_white = marking_masks(hls, light, mask, region.top_v_px, region.bottom_v_px, bgr, held)
     yellow = flat_paint(yellow, grid, region.bottom_v_px)
     features = cv2.bitwise_or(white, yellow)
     lanes = detect_ground_lanes(white, yellow, grid, region.bottom_v_px, spec, (before.left, before.right))
@@ -513,10 +524,6 @@ def ground_lanes_in_image(
     hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid),
               lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid))
     curves = tuple(_image_polyline(b, cam, spec) for b in (lanes.left, lanes.right))
-    hls_white = None
-    if bgr is not None and gains is not None and not is_neutral(gains):
-        hls_white = hls.copy()
-        hls_white[band] = balanced_hls(bgr[band], gains)
     return GroundFit(lanes, left, right, agree, features, integral, hidden, expected_points(lanes, cam, region, spec),
                      (curves[0], curves[1]), lane_interior(lanes, grid, region, spec, white[band] > 0), hls_white)
 
