@@ -21,6 +21,7 @@ import numpy as np
 SATURATED_MIN = 250  # [grey level] at or above: clipped white
 BLACK_MAX = 10  # [grey level] at or below: crushed black
 _NOISE_KERNEL = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
+_LEVELS = np.arange(256, dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -42,18 +43,20 @@ class Exposure:
 
 def road_exposure(gray: np.ndarray, mask: np.ndarray) -> Exposure:
     """Exposure over the mask (uint8 0/255) of a grey image; an empty mask gives NaN (unknown)."""
-    n = cv2.countNonZero(mask)
+    hist = cv2.calcHist([gray], [0], mask, [256], [0, 256]).ravel()  # one pass gives the mean and both clipped shares
+    n = float(hist.sum())  # counts are exact in float32 up to 2²⁴ pixels
     if n == 0:
         return Exposure(float("nan"), float("nan"), float("nan"))
-    brightness = cv2.mean(gray, mask)[0]
-    saturated = cv2.countNonZero(cv2.bitwise_and(cv2.inRange(gray, SATURATED_MIN, 255), mask)) / n
-    black = cv2.countNonZero(cv2.bitwise_and(cv2.inRange(gray, 0, BLACK_MAX), mask)) / n
-    return Exposure(float(brightness), float(saturated), float(black), noise_grey(gray, mask))
+    brightness = float(hist.astype(np.float64) @ _LEVELS) / n
+    saturated = float(hist[SATURATED_MIN:].sum()) / n
+    black = float(hist[: BLACK_MAX + 1].sum()) / n
+    return Exposure(brightness, saturated, black, noise_grey(gray, mask))
 
 
 def noise_grey(gray: np.ndarray, mask: np.ndarray) -> float:
     """Immerkær's noise estimate (grey levels) over the mask's pixels; NaN if the image is too small for the 3×3 kernel."""
     if min(gray.shape[:2]) < 3:
         return float("nan")
-    response = np.abs(cv2.filter2D(gray, cv2.CV_32F, _NOISE_KERNEL, borderType=cv2.BORDER_REPLICATE))
+    # 16-bit integers hold the response exactly (|I ∗ N| ≤ 16 · 255) and cost half the float32 filter
+    response = np.abs(cv2.filter2D(gray, cv2.CV_16S, _NOISE_KERNEL, borderType=cv2.BORDER_REPLICATE))
     return float(np.sqrt(np.pi / 2.0) * cv2.mean(response, mask)[0] / 6.0)

@@ -28,6 +28,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
+from fearguard.medians import median
 from fearguard.vision.lane_tracker import LOST_AFTER_S
 from fearguard.vision.lanes import RIDGE_MIN, YELLOW_SAT_MIN, LaneLine, RoadRegion, smoothed_light
 from fearguard.vision.obstacle import INSET
@@ -246,7 +247,7 @@ def flat_paint(yellow: np.ndarray, grid: GroundGrid, bottom_v_px: int) -> np.nda
             continue
         mine = labels[top : foot + 1, left : left + width] == i
         widths = mine.sum(axis=1) * grid.lateral_m_per_px[top : foot + 1]
-        if float(np.median(widths)) >= STANDING_WIDTH_M:
+        if float(median(widths)) >= STANDING_WIDTH_M:
             if out is yellow:
                 out = yellow.copy()
             out[grid.top_v_px + top : grid.top_v_px + foot + 1, left : left + width][mine] = 0

@@ -44,6 +44,8 @@ class BoundaryTrack:
         self.last_seen_s = -math.inf
         self.outliers = 0
         self.pending: np.ndarray | None = None  # the last outlier, which the next must agree with to count
+        self._model_dt_s = math.nan  # the period F and Q were built for
+        self._F = self._Q = np.eye(4)
 
     def _new_filter(self, z: np.ndarray) -> KalmanFilter:
         kf = kalman_filter(dim_x=4, dim_z=2)
@@ -57,12 +59,15 @@ class BoundaryTrack:
     def predict(self, dt_s: float) -> None:
         if self.kf is None:
             return
-        self.kf.F = np.array([[1.0, 0, dt_s, 0], [0, 1.0, 0, dt_s], [0, 0, 1.0, 0], [0, 0, 0, 1.0]])
-        q = (ACCEL_STD * self.width_px) ** 2
-        g = np.array([0.5 * dt_s**2, dt_s])
-        block = np.outer(g, g) * q
-        self.kf.Q = np.array([[block[0, 0], 0, block[0, 1], 0], [0, block[0, 0], 0, block[0, 1]],
-                              [block[1, 0], 0, block[1, 1], 0], [0, block[1, 0], 0, block[1, 1]]])
+        if dt_s != self._model_dt_s:  # the frame period rarely changes: build F and Q once per period
+            self._model_dt_s = dt_s
+            self._F = np.array([[1.0, 0, dt_s, 0], [0, 1.0, 0, dt_s], [0, 0, 1.0, 0], [0, 0, 0, 1.0]])
+            q = (ACCEL_STD * self.width_px) ** 2
+            g = np.array([0.5 * dt_s**2, dt_s])
+            block = np.outer(g, g) * q
+            self._Q = np.array([[block[0, 0], 0, block[0, 1], 0], [0, block[0, 0], 0, block[0, 1]],
+                                [block[1, 0], 0, block[1, 1], 0], [0, block[1, 0], 0, block[1, 1]]])
+        self.kf.F, self.kf.Q = self._F, self._Q
         self.kf.predict()
 
     def update(self, t_s: float, z: np.ndarray | None) -> bool:
@@ -74,9 +79,10 @@ class BoundaryTrack:
         if self.kf is None:
             self.kf, self.last_seen_s, self.outliers, self.pending = self._new_filter(z), t_s, 0, None
             return True
-        y = z - self.kf.H @ self.kf.x
-        s = self.kf.H @ self.kf.P @ self.kf.H.T + self.kf.R
-        if float(y @ np.linalg.solve(s, y)) > GATE_CHI2:
+        # innovation and its covariance: H picks (u_top, u_bottom), so H·x and H·P·Hᵀ are slices
+        y = z - self.kf.x[:2]
+        s = self.kf.P[:2, :2] + self.kf.R
+        if _mahalanobis2(y, s) > GATE_CHI2:
             persists = self.pending is not None and float(np.max(np.abs(z - self.pending))) <= REINIT_AGREE * self.width_px
             self.outliers, self.pending = (self.outliers + 1 if persists else 1), z
             if self.outliers < REINIT_AFTER:
@@ -96,6 +102,14 @@ class BoundaryTrack:
         u_top, u_bottom = float(self.kf.x[0]), float(self.kf.x[1])
         slope = (u_bottom - u_top) / max(1, region.bottom_v_px - region.top_v_px)
         return LaneLine(slope, u_top - slope * region.top_v_px, 0.0, 0)
+
+
+def _mahalanobis2(y: np.ndarray, s: np.ndarray) -> float:
+    """yᵀ·S⁻¹·y for a 2-vector and a 2×2 covariance, in closed form (np.linalg.solve costs ~10× more at this size)."""
+    det = s[0, 0] * s[1, 1] - s[0, 1] * s[1, 0]
+    if not det > 0.0:
+        return math.inf  # a degenerate covariance: the detection cannot be judged consistent
+    return float((s[1, 1] * y[0] * y[0] - (s[0, 1] + s[1, 0]) * y[0] * y[1] + s[0, 0] * y[1] * y[1]) / det)
 
 
 @dataclass(frozen=True)

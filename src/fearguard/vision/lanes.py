@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
+from itertools import islice
 
 import cv2
 import numpy as np
@@ -180,15 +181,18 @@ def marking_features(
     top-hat is row by row, so each half is computed on its own rows only). ``light``: ``smoothed_light(hls)`` when
     the caller already has it.
     """
-    hue, sat = hls[:, :, 0], hls[:, :, 2]
     light = smoothed_light(hls) if light is None else light
-    ridge_l, ridge_s = _ridges(light, region), _ridges(sat, region)
-    background = light.astype(np.int16) - ridge_l  # the opening: the road's lightness under the marking
-    bright = (ridge_l >= RIDGE_MIN) & (ridge_l >= RIDGE_RATIO * background)
-    yellow = (hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]) & (sat >= YELLOW_SAT_MIN) & (light >= YELLOW_LIGHT_MIN)
-    yellow &= ridge_s >= RIDGE_MIN
-    features = ((bright | yellow) * np.uint8(255)).astype(np.uint8)
-    return cv2.bitwise_and(features, mask)
+    ridge_l, ridge_s = _ridges(light, region), _ridges(hls[:, :, 2], region)
+    # every test on whole uint8 images (OpenCV's vectorised loops; numpy's on the strided HLS channels cost ~5×)
+    background = cv2.subtract(light, ridge_l)  # the opening: the road's lightness under the marking (≤ light: exact)
+    bright = cv2.compare(ridge_l, cv2.LUT(background, _BRIGHT_MIN), cv2.CMP_GE)
+    yellow = cv2.inRange(hls, (YELLOW_HUE[0], 0, YELLOW_SAT_MIN), (YELLOW_HUE[1], 255, 255))
+    yellow &= cv2.compare(light, YELLOW_LIGHT_MIN, cv2.CMP_GE) & cv2.compare(ridge_s, RIDGE_MIN, cv2.CMP_GE)
+    return cv2.bitwise_and(bright | yellow, mask)
+
+
+# the least ridge that is bright over each background lightness b: ≥ RIDGE_MIN and ≥ RIDGE_RATIO·b (as float, rounded up)
+_BRIGHT_MIN = np.maximum(RIDGE_MIN, np.ceil(RIDGE_RATIO * np.arange(256))).astype(np.uint8)
 
 
 def smoothed_light(hls: np.ndarray) -> np.ndarray:
@@ -281,35 +285,40 @@ def candidate_fits(
     candidates = (score >= RANSAC_KEEP * score.max()) & (off_centre >= MIN_OFF_CENTRE * w)
     if not candidates.any():
         candidates = score >= RANSAC_KEEP * score.max()
-    if prior is not None:
-        rows = np.array([0.5 * (region.top_v_px + region.bottom_v_px), region.bottom_v_px])
-        order_key = np.abs(slope[:, None] * rows[None, :] + icpt[:, None] - prior.u_at(rows)[None, :]).mean(axis=1)
+    if prior is not None:  # mean distance from the prior at the region's middle and bottom rows
+        mid, bottom = 0.5 * (region.top_v_px + region.bottom_v_px), float(region.bottom_v_px)
+        order_key = (np.abs(slope * mid + icpt - prior.u_at(mid)) + np.abs(slope * bottom + icpt - prior.u_at(bottom))) / 2
     else:
         order_key = off_centre
     taken = np.zeros(len(seg), bool)
     given = 0
-    for best in np.flatnonzero(candidates)[np.argsort(order_key[candidates])]:
+    for best in np.flatnonzero(candidates)[np.argsort(order_key[candidates])].tolist():
         if taken[best]:
             continue  # a hypothesis already explained by a preferred line is the same line
         if given >= count:
             return
-        taken |= inlier[best]
-        chosen = seg[inlier[best]]
+        mine = inlier[best]
+        taken |= mine
+        chosen = seg[mine]
         v = np.concatenate([chosen[:, 1], chosen[:, 3]])
         u = np.concatenate([chosen[:, 0], chosen[:, 2]])
+        weight = length[mine]
         given += 1
-        yield _weighted_fit(v, u, np.tile(length[inlier[best]], 2)) or (float(slope[best]), float(icpt[best]))
+        yield _weighted_fit(v, u, np.concatenate([weight, weight])) or (float(slope[best]), float(icpt[best]))
 
 
 def _weighted_fit(v: np.ndarray, u: np.ndarray, w: np.ndarray) -> tuple[float, float] | None:
+    """Weighted least squares u = a·v + b (dot products: a few array operations, this runs for every candidate)."""
     sw = w.sum()
     if sw <= 0:
         return None
-    mv, mu = (w * v).sum() / sw, (w * u).sum() / sw
-    var = (w * (v - mv) ** 2).sum()
+    mv, mu = (w @ v) / sw, (w @ u) / sw
+    dv = v - mv
+    wdv = w * dv
+    var = wdv @ dv
     if var < 1.0:  # all points on one row: no direction
         return None
-    a = (w * (v - mv) * (u - mu)).sum() / var
+    a = (wdv @ (u - mu)) / var
     return float(a), float(mu - a * mv)
 
 
@@ -409,13 +418,13 @@ def detect_lanes(
     sides = split_by_slope(segments, region.width_px)
     lane_width = lane_width_rows(np.arange(region.top_v_px, region.bottom_v_px + 1), priors, region)
     plain = _plainness(maps.paint_integral[-1, -1] / max(1, cv2.countNonZero(mask)), region.clutter)
-    fits = [list(candidate_fits(side, region, prior)) for side, prior in zip(sides, priors, strict=True)]
+    fits = [candidate_fits(side, region, prior) for side, prior in zip(sides, priors, strict=True)]
     # the preferred candidate of each side first, both in one pass: when it is well supported it cannot be beaten
-    # clearly, and the others need no scan; the others of the sides that still need them in a second pass
-    scanned = _scan_sides(maps, region, [f[:1] for f in fits], lane_width)
-    rest = [bool(s) and s[0][1] * plain < PREFER_SHARE and len(f) > 1 for s, f in zip(scanned, fits, strict=True)]
+    # clearly, and the others need neither a fit nor a scan; the others of the sides that still need them in a second pass
+    scanned = _scan_sides(maps, region, [list(islice(f, 1)) for f in fits], lane_width)
+    rest = [list(f) if s and s[0][1] * plain < PREFER_SHARE else [] for s, f in zip(scanned, fits, strict=True)]
     if any(rest):
-        more = _scan_sides(maps, region, [f[1:] if r else [] for f, r in zip(fits, rest, strict=True)], lane_width)
+        more = _scan_sides(maps, region, rest, lane_width)
         scanned = [a + b for a, b in zip(scanned, more, strict=True)]
     found: list[list[LaneLine]] = [[], []]
     for i, results in enumerate(scanned):

@@ -23,6 +23,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
+from fearguard.medians import median
 from fearguard.vision.lanes import LaneLine, RoadRegion, default_lines  # noqa: F401  (default_lines: re-exported)
 from fearguard.vision.ridges import clamp
 
@@ -95,7 +96,7 @@ class RoadModel:
             return
         self._unlike = 0
         self._seen.append(measured)
-        grey, sat, rough = np.median(np.array([(a.grey, a.saturation, a.roughness) for a in self._seen]), axis=0)
+        grey, sat, rough = median(np.array([(a.grey, a.saturation, a.roughness) for a in self._seen]), axis=0)
         self.current = RoadAppearance(float(grey), float(sat), float(rough))
 
 
@@ -146,7 +147,7 @@ def road_appearance(
         r, c = np.nonzero(interior[1 :: 2 * ROW_STEP, ::2])
         if len(r):
             r, c = 1 + 2 * ROW_STEP * r, 2 * c
-            grey, sat, rough = np.median(np.stack([maps.grey[r, c], maps.saturation[r, c], maps.roughness[r, c]]), axis=1)
+            grey, sat, rough = median(np.stack([maps.grey[r, c], maps.saturation[r, c], maps.roughness[r, c]]), axis=1)
             return RoadAppearance(float(grey), float(sat), float(rough))
     rows = np.arange(region.top_v_px + 1, region.bottom_v_px, 2 * ROW_STEP)
     a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
@@ -154,7 +155,7 @@ def road_appearance(
     frac = _INTERIOR_FRACTIONS
     cols = clamp(np.rint(lo[:, None] + frac[None, :] * (hi - lo)[:, None]).astype(np.int64), 0, region.width_px - 1)
     r = (rows - maps.top_v_px)[:, None]
-    grey, sat, rough = np.median(np.stack([maps.grey[r, cols], maps.saturation[r, cols], maps.roughness[r, cols]]).reshape(3, -1), axis=1)
+    grey, sat, rough = median(np.stack([maps.grey[r, cols], maps.saturation[r, cols], maps.roughness[r, cols]]).reshape(3, -1), axis=1)
     return RoadAppearance(float(grey), float(sat), float(rough))
 
 
@@ -170,8 +171,8 @@ def road_reference(gray: np.ndarray, region: RoadRegion, left: LaneLine, right: 
     cols = np.arange(gray.shape[1])
     inside = (cols >= lo[:, None]) & (cols < hi[:, None])  # [lo, hi) of each row
     if not inside.any():
-        return float(np.median(gray[top : bottom + 1]))
-    return float(np.median(gray[rows][inside]))
+        return float(median(gray[top : bottom + 1]))
+    return float(median(gray[rows][inside]))
 
 
 def row_references(
@@ -199,16 +200,6 @@ def row_references(
 def sample_rows(region: RoadRegion) -> np.ndarray:
     """The working-image rows the expected marking region is sampled on."""
     return np.arange(region.top_v_px, region.bottom_v_px + 1, ROW_STEP)
-
-
-def hidden_samples(
-    maps: SurfaceMaps, region: RoadRegion, line: LaneLine, road: RoadAppearance, row_ref: tuple[np.ndarray, np.ndarray],
-    boxes: tuple[tuple[int, int, int, int], ...] = (),
-) -> tuple[int, int]:
-    """(hidden, total) samples along one expected boundary (vectorised over rows); row_ref: row_references on sample_rows."""
-    rows = sample_rows(region)
-    centre = np.rint(line.u_at(rows.astype(float))).astype(np.int64) if len(rows) else rows
-    return hidden_at(maps, region, rows, centre, road, row_ref, boxes)
 
 
 def hidden_at(
@@ -261,10 +252,14 @@ def occlusion(
     if not isinstance(road, RoadAppearance):
         measured = road_appearance(gray, hls, region, left, right, maps)
         road = replace(measured, grey=float(road)) if math.isfinite(road) else measured
-    row_ref = row_references(gray, region, sample_rows(region), (left, right))  # the same rows for both boundaries
-    if curves is not None:
-        counts = [hidden_at(maps, region, rows, cols, road, row_ref, boxes) for rows, cols in curves]
-    else:
-        counts = [hidden_samples(maps, region, line, road, row_ref, boxes) for line in (left, right)]
-    n = sum(c[1] for c in counts)
-    return float(sum(c[0] for c in counts) / n) if n else 1.0
+    rows = sample_rows(region)
+    row_ref = row_references(gray, region, rows, (left, right))  # the same rows for both boundaries
+    if curves is None:  # both straight boundaries sampled on every sample row
+        v = rows.astype(float)
+        curves = tuple((rows, np.rint(line.u_at(v)).astype(np.int64)) for line in (left, right))
+    if not curves:
+        return 1.0  # no boundary expected anywhere: nothing of them is seen
+    # every sample of both boundaries judged in one pass (each sample on its own: the shares add up)
+    hidden, n = hidden_at(maps, region, np.concatenate([r for r, _ in curves]), np.concatenate([c for _, c in curves]), road,
+                          row_ref, boxes)
+    return float(hidden / n) if n else 1.0

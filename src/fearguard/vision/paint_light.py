@@ -23,6 +23,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from fearguard.medians import median
+
 MIN_PIXELS = 50  # [-] fewer bright ridge pixels than this (of every 4th pixel): no estimate (nothing painted in view)
 SPLIT_MIN = 0.6  # [log-chroma] the two paints' classes must be this far apart (Duckietown's: 0.9-1.4; one paint: < 0.5)
 SHARE_RANGE = (0.1, 0.9)  # [-] the white class's share of the bright ridge pixels (both paints in view)
@@ -73,9 +75,9 @@ def paint_gains(bgr: np.ndarray, paint: np.ndarray, on_road: np.ndarray, looks_w
     ground = bgr[on_road & ~paint]
     if len(ground) < MIN_PIXELS:
         return None
-    light = np.median(px[whites], axis=0)
+    light = median(px[whites], axis=0)
     gains = light.mean() / light
-    road_colour = np.median(ground, axis=0).astype(np.float64) + 1.0
+    road_colour = median(ground, axis=0).astype(np.float64) + 1.0
     if _spread(road_colour * gains) > _spread(road_colour) + GREY_TOLERANCE:
         return None
     return np.ones(3) if float(np.max(np.abs(gains - 1.0))) < DEAD_BAND else gains

@@ -76,12 +76,12 @@ def ridge_maps(channels: tuple[np.ndarray, ...], features: np.ndarray, top_v_px:
     feat = features[band] > 0
     h, w = feat.shape
     integrals = np.empty((1 + 2 * len(channels), h + 1, w + 1), np.float64)
-    integrals[0] = cv2.integral(feat.view(np.uint8), sdepth=cv2.CV_64F)
+    cv2.integral(feat.view(np.uint8), sum=integrals[0], sdepth=cv2.CV_64F)  # written in place: no copies
     for i, c in enumerate(channels):
-        integrals[1 + 2 * i], integrals[2 + 2 * i] = cv2.integral2(np.ascontiguousarray(c[band]), sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
-    gaps = np.zeros((h, w + 1), np.int64)
+        cv2.integral2(c[band], sum=integrals[1 + 2 * i], sqsum=integrals[2 + 2 * i], sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
+    gaps = np.zeros((h, w + 1), np.int32)  # int32: rows · (width + 1) is far below 2³¹
     np.cumsum(~feat, axis=1, out=gaps[:, 1:])  # non-marking pixels in [0, u) of each row
-    gaps += (np.arange(h) * (w + 1))[:, None]
+    gaps += (np.arange(h, dtype=np.int32) * (w + 1))[:, None]
     return RidgeMaps(top_v_px, feat, integrals, gaps.ravel())
 
 
@@ -89,10 +89,10 @@ def _span_sums(integrals: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndar
     """Sums over columns [lo, hi) of band rows r (r: (rows,); lo, hi: (..., rows)), for every layer: (layers, ..., rows).
     One flat ``take`` for all corners of all spans (fancy indexing per corner costs more than the arithmetic)."""
     stride = integrals.shape[2]
-    top, bottom = r * stride, (r + 1) * stride
-    idx = np.stack([bottom + hi, bottom + lo, top + hi, top + lo])
+    rows = np.stack([(r + 1) * stride, r * stride])  # the integral rows below and above each span
+    idx = rows.reshape(2, 1, *([1] * (hi.ndim - 1)), -1) + np.stack([hi, lo])  # (corner row, hi/lo, ..., points)
     c = np.take(integrals.reshape(integrals.shape[0], -1), idx, axis=1)
-    return c[:, 0] - c[:, 1] - c[:, 2] + c[:, 3]
+    return c[:, 0, 0] - c[:, 0, 1] - c[:, 1, 0] + c[:, 1, 1]
 
 
 def scan_ridges(
@@ -122,7 +122,7 @@ def scan_ridges(
     cc = clamp(cols, 0, w - 1)
     near = maps.feat[rr[:, None], cc] & (cols == cc)
     j0 = np.argmax(near, axis=2)  # the first True: the nearest marking pixel
-    at = np.flatnonzero(np.take_along_axis(near, j0[:, :, None], axis=2))  # flat (k·n) indices where one was found
+    at = np.flatnonzero(near.any(axis=2))  # flat (k·n) indices where one was found
     # from here on only those points, as flat arrays
     row_of = at % n
     r, u0 = rr[row_of], cols.reshape(k * n, -1)[at, j0.ravel()[at]]
@@ -132,8 +132,8 @@ def scan_ridges(
     fits = (width >= np.maximum(MIN_WIDTH_PX, width_range[0] * lw_at)) & (width <= np.maximum(MAX_WIDTH_FLOOR * w, width_range[1] * lw_at))
     at, r, a, b, width = at[fits], r[fits], a[fits], b[fits], width[fits]
     fw = np.maximum(2, width)
-    lo = clamp(np.stack([a, a - FLANK_GAP_PX - fw, b + FLANK_GAP_PX + 1]), 0, w)  # spans: run, left flank, right flank
-    hi = clamp(np.stack([b + 1, a - FLANK_GAP_PX, b + FLANK_GAP_PX + 1 + fw]), 0, w)
+    lo, hi = clamp(np.stack([a, a - FLANK_GAP_PX - fw, b + FLANK_GAP_PX + 1,  # spans: run, left flank, right flank
+                             b + 1, a - FLANK_GAP_PX, b + FLANK_GAP_PX + 1 + fw]), 0, w).reshape(2, 3, -1)
     count = hi - lo
     means = _span_sums(maps.integrals, r, lo, hi) / np.maximum(count, 1)  # (layers, spans, points)
     paint = means[1::2, 0]  # each channel's mean over the run
@@ -153,7 +153,7 @@ def scan_ridges(
     inner = np.full(k * n, np.nan)
     inner[at] = np.where(np.asarray(inner_is_left)[at // n], a, b)
     inner = np.where(ok, inner.reshape(k, n), np.nan)
-    support = np.minimum(1.0, np.count_nonzero(ok, axis=1) / n / SUPPORT_FULL)
+    support = np.minimum(1.0, ok.sum(axis=1) / n / SUPPORT_FULL)
     return RidgeScan(rows, ok, inner, support)
 
 

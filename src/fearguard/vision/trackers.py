@@ -16,6 +16,7 @@ from typing import Protocol
 
 import numpy as np
 
+from fearguard.medians import median
 from fearguard.observation import LeadBox
 from fearguard.vision.ground_lanes import GroundLanes, GroundMemory
 from fearguard.vision.lane_tracker import LaneTracker, TrackedLanes
@@ -79,7 +80,7 @@ class ConfidenceMedian:
 
     def update(self, confidence: float) -> float:
         self._recent.append(confidence)
-        return float(np.median(self._recent))
+        return float(median(np.array(self._recent)))
 
 
 class PassThroughLanes:
