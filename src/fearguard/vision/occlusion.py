@@ -128,8 +128,8 @@ def surface_maps(
     grey = cv2.blur(g, k, borderType=cv2.BORDER_REPLICATE)
     diff = np.zeros_like(g)  # |right neighbour − pixel|, clipped; 0 in the last column (no right neighbour)
     cv2.min(cv2.absdiff(g[:, 1:], g[:, :-1]), DIFF_CLIP_PX, dst=diff[:, :-1])
-    rough = cv2.blur(diff, k, borderType=cv2.BORDER_REPLICATE) / np.maximum(grey, 1.0)
-    sat = cv2.blur(hls[band, :, 2].astype(np.float32), k, borderType=cv2.BORDER_REPLICATE)
+    rough = cv2.divide(cv2.blur(diff, k, borderType=cv2.BORDER_REPLICATE), cv2.max(grey, 1.0))
+    sat = cv2.blur(cv2.extractChannel(hls[band], 2).astype(np.float32), k, borderType=cv2.BORDER_REPLICATE)
     if paint_integral is None:
         paint_integral = cv2.integral((features[band] > 0).view(np.uint8), sdepth=cv2.CV_64F)
     return SurfaceMaps(region.top_v_px, grey, sat, rough, hls[band, :, 0], paint_integral)

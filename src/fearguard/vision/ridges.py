@@ -54,6 +54,18 @@ class RidgeMaps:
     feat: np.ndarray  # bool, rows top.. of the band
     integrals: np.ndarray  # (1 + 2·channels, rows + 1, width + 1) float64
     gaps_key: np.ndarray  # flat (rows · (width + 1)): non-marking pixels in [0, u) of row r, + r · (width + 1)
+    near_pad: int  # [px] columns of False each side of ``feat_padded``: the search window never leaves it
+    feat_padded: np.ndarray  # flat (rows · (width + 2·near_pad)): the marking mask, padded
+
+    def near_marking(self, r: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For band rows r and columns u (int, broadcastable): whether a marking pixel lies within the search distance, and
+        the column of the nearest one (ties: the left one; only meaningful where found). Columns outside the image are
+        never marking pixels."""
+        w, pad = self.feat.shape[1], self.near_pad
+        offsets = _preference(_search_px(w))  # nearest first
+        u = clamp(u, -pad // 2 - 1, w + pad // 2)  # beyond these the whole window lies in the padding anyway
+        near = self.feat_padded.take((r * (w + 2 * pad) + pad + u)[..., None] + offsets)
+        return near.any(axis=-1), u + offsets[np.argmax(near, axis=-1)]
 
     @property
     def paint_integral(self) -> np.ndarray:
@@ -82,7 +94,15 @@ def ridge_maps(channels: tuple[np.ndarray, ...], features: np.ndarray, top_v_px:
     gaps = np.zeros((h, w + 1), np.int32)  # int32: rows · (width + 1) is far below 2³¹
     np.cumsum(~feat, axis=1, out=gaps[:, 1:])  # non-marking pixels in [0, u) of each row
     gaps += (np.arange(h, dtype=np.int32) * (w + 1))[:, None]
-    return RidgeMaps(top_v_px, feat, integrals, gaps.ravel())
+    pad = 2 * _search_px(w) + 1
+    padded = np.zeros((h, w + 2 * pad), bool)
+    padded[:, pad : pad + w] = feat
+    return RidgeMaps(top_v_px, feat, integrals, gaps.ravel(), pad, padded.ravel())
+
+
+def _search_px(width_px: int) -> int:
+    """How far from a candidate column a marking pixel is looked for."""
+    return max(2, int(SEARCH * width_px))
 
 
 def _span_sums(integrals: np.ndarray, r: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -117,15 +137,11 @@ def scan_ridges(
     lw = np.maximum(lane_width_px, 4.0)
     rr = rows - maps.top_v_px
     # the marking pixel nearest the candidate column within the search distance (a tie: the left one)
-    u = np.rint(centre_u).astype(np.int64)
-    cols = u[:, :, None] + _preference(max(2, int(SEARCH * w)))  # (k, n, offsets), nearest offset first
-    cc = clamp(cols, 0, w - 1)
-    near = maps.feat[rr[:, None], cc] & (cols == cc)
-    j0 = np.argmax(near, axis=2)  # the first True: the nearest marking pixel
-    at = np.flatnonzero(near.any(axis=2))  # flat (k·n) indices where one was found
+    found, nearest = maps.near_marking(rr[None, :], np.rint(centre_u).astype(np.int64))  # rows broadcast over candidates
+    at = np.flatnonzero(found)  # flat (k·n) indices where one was found
     # from here on only those points, as flat arrays
     row_of = at % n
-    r, u0 = rr[row_of], cols.reshape(k * n, -1)[at, j0.ravel()[at]]
+    r, u0 = rr[row_of], nearest.ravel()[at]
     a, b = maps.runs(r, u0)
     width = b - a + 1
     lw_at = lw[row_of]
@@ -172,18 +188,14 @@ def clamp(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
 
 
 def _in_long_runs(ok: np.ndarray, min_rows: int) -> np.ndarray:
-    """ok (candidates, rows), keeping only runs of at least min_rows consecutive True rows: a row is kept when some
-    window of min_rows rows around it is all True (a few shifted ANDs and ORs, all candidates at once)."""
+    """ok (candidates, rows), keeping only runs of at least min_rows consecutive True rows: a morphological opening
+    with a min_rows-long line along the rows (erosion marks the windows that are all True, dilation gives each its
+    rows back; beyond the ends nothing is True) — two OpenCV calls for all candidates."""
     n = ok.shape[1]
     if min_rows <= 1 or n == 0:
         return ok
     if n < min_rows:
         return np.zeros_like(ok)
-    span = n - min_rows + 1
-    full = ok[:, :span].copy()  # full[:, i]: rows i .. i + min_rows - 1 all True
-    for s in range(1, min_rows):
-        full &= ok[:, s : s + span]
-    out = np.zeros_like(ok)
-    for s in range(min_rows):
-        out[:, s : s + span] |= full
-    return out
+    line = np.ones((1, min_rows), np.uint8)
+    starts = cv2.erode(ok.view(np.uint8), line, anchor=(0, 0), borderType=cv2.BORDER_CONSTANT, borderValue=0)  # i..i+m-1 all
+    return cv2.dilate(starts, line, anchor=(min_rows - 1, 0)).view(bool)  # any window start in i-m+1..i
