@@ -199,7 +199,7 @@ def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
     """BGR at the frame's size (undistorted when a camera is given), then grey/HLS of the road rows at the working size."""
     bgr = _as_bgr(frame)
     fh, fw = bgr.shape[:2]
-    cam = camera.scaled_to(fw, fh) if camera is not None else CameraModel.default(fw, fh)
+    cam = _frame_camera(camera, fw, fh)
     if camera is not None:
         bgr = cam.undistort(bgr)
     ww, wh = work_size(fw, fh)
@@ -331,6 +331,12 @@ def _analyze(
         reasons=reasons, timings_ms=timings, obstacle=seen.obstacle, ground=lanes.ground,
         curves_px=None if lanes.curves_px is None else tuple(c * p.scale if c is not None else None for c in lanes.curves_px),
     )
+
+
+@lru_cache(maxsize=8)
+def _frame_camera(camera: CameraModel | None, width_px: int, height_px: int) -> CameraModel:
+    """The camera at the frame's size (the default one without a model): the same every frame, so built once."""
+    return camera.scaled_to(width_px, height_px) if camera is not None else CameraModel.default(width_px, height_px)
 
 
 @lru_cache(maxsize=8)

@@ -53,6 +53,7 @@ class BoundaryTrack:
         kf.H = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0]])
         r = (MEASUREMENT_STD * self.width_px) ** 2
         kf.R = np.eye(2) * r
+        kf.inv = _inverse_2x2  # filterpy's hook for the inverse: S is 2×2 here, np.linalg.inv costs ~10× the formula
         kf.P = np.diag([r, r, (VELOCITY_STD * self.width_px) ** 2, (VELOCITY_STD * self.width_px) ** 2])
         return kf
 
@@ -91,7 +92,7 @@ class BoundaryTrack:
                 return False
             self.kf = self._new_filter(z)
         else:
-            self.kf.update(z)
+            self.kf.update(z, H=self.kf.H)  # H given: z is already the right shape (filterpy skips reshaping it)
         self.last_seen_s, self.outliers, self.pending = t_s, 0, None
         return True
 
@@ -102,6 +103,12 @@ class BoundaryTrack:
         u_top, u_bottom = float(self.kf.x[0]), float(self.kf.x[1])
         slope = (u_bottom - u_top) / max(1, region.bottom_v_px - region.top_v_px)
         return LaneLine(slope, u_top - slope * region.top_v_px, 0.0, 0)
+
+
+def _inverse_2x2(s: np.ndarray) -> np.ndarray:
+    """The inverse of a 2×2 matrix by the adjugate (filterpy's ``KalmanFilter.inv``)."""
+    det = s[0, 0] * s[1, 1] - s[0, 1] * s[1, 0]
+    return np.array([[s[1, 1], -s[0, 1]], [-s[1, 0], s[0, 0]]]) / det
 
 
 def _mahalanobis2(y: np.ndarray, s: np.ndarray) -> float:

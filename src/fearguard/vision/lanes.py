@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
+from functools import lru_cache
 from itertools import islice
 
 import cv2
@@ -401,13 +402,20 @@ def _plainness(paint_share: float, clutter: tuple[float, float]) -> float:
     return float(min(1.0, max(0.0, (clutter[1] - paint_share) / (clutter[1] - clutter[0]))))
 
 
+@lru_cache(maxsize=8)
+def _band_region(region: RoadRegion) -> RoadRegion:
+    """The region as seen by the road rows alone (row 0 = its top): the same every frame, so built once."""
+    height = region.bottom_v_px - region.top_v_px
+    return replace(region, top_v_px=0, bottom_v_px=height, height_px=height + 1)
+
+
 def detect_lanes(
     hls: np.ndarray, region: RoadRegion, mask: np.ndarray | None = None, priors: tuple[LaneLine | None, LaneLine | None] = (None, None)
 ) -> LaneDetection:
     """Left/right boundaries of the ego lane in a working-size HLS image (cv2.COLOR_BGR2HLS); priors: last tracked ones."""
     mask = region_mask(region) if mask is None else mask
     band = slice(region.top_v_px, region.bottom_v_px + 1)  # everything below runs on the road rows only
-    crop = replace(region, top_v_px=0, bottom_v_px=region.bottom_v_px - region.top_v_px, height_px=region.bottom_v_px - region.top_v_px + 1)
+    crop = _band_region(region)
     features = np.zeros(mask.shape, np.uint8)
     light = np.zeros(mask.shape, np.uint8)
     light[band] = smoothed_light(hls[band])
