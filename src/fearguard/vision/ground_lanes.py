@@ -154,6 +154,16 @@ class GroundGrid:
     lateral_m_per_px: np.ndarray  # (rows,)
     cx_px: float
 
+    def plane(self, width_px: int) -> tuple[np.ndarray, np.ndarray]:
+        """Every pixel's lateral offset y (m, + = left) and squared ground distance x² + y², (rows, width): the same for
+        every frame of the camera, so computed once per width (``lane_interior`` tests every pixel against the lane)."""
+        cache = self.__dict__.setdefault("_planes", {})  # the dataclass is frozen; this is a cache, not state
+        if width_px not in cache:
+            y = -(np.arange(width_px)[None, :] - self.cx_px) * self.lateral_m_per_px[:, None]
+            x = self.x_m[:, None]
+            cache[width_px] = (y, x * x + y * y)
+        return cache[width_px]
+
 
 @lru_cache(maxsize=8)
 def ground_grid(camera: CameraModel, top_v_px: int, bottom_v_px: int, far_m: float) -> GroundGrid | None:
@@ -585,8 +595,8 @@ def lane_interior(
         return out
     cols = np.arange(region.width_px)
     x = grid.x_m[rows][:, None]
-    y = -(cols[None, :] - grid.cx_px) * grid.lateral_m_per_px[rows][:, None]  # (rows, width)
-    r2 = x * x + y * y
+    y_all, r2_all = grid.plane(region.width_px)
+    y, r2 = y_all[rows], r2_all[rows]  # (rows, width)
     inset = INSET * w
     inside = r2 <= reach * reach
     # right of the left boundary by the inset and left of the right one: the sign of the offset curves' polynomial is
@@ -594,9 +604,10 @@ def lane_interior(
     for curve, delta, sign in ((left, -inset, -1.0), (right, inset, 1.0)):
         moved = curve.offset(delta)
         if moved is not None:
-            inside &= sign * (moved.a * r2 + moved.b * x + moved.c * y + moved.d) >= 0.0
+            value = moved.a * r2 + moved.b * x + moved.c * y + moved.d
         else:
-            inside &= (sign * (curve.distance(np.broadcast_to(x, y.shape).ravel(), y.ravel()) - delta) >= 0.0).reshape(y.shape)
+            value = (curve.distance(np.broadcast_to(x, y.shape).ravel(), y.ravel()) - delta).reshape(y.shape)
+        inside &= (value >= 0.0) if sign > 0 else (value <= 0.0)  # sign · value ≥ 0, without the product
     band_rows = rows + grid.top_v_px - region.top_v_px
     has = inside.any(axis=1)
     middle = np.where(has, np.argmax(inside, axis=1) + inside.sum(axis=1) // 2, 0)[:, None]  # a column inside each row
