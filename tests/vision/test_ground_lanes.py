@@ -17,7 +17,9 @@ from hypothesis import strategies as st
 from fearguard.camera import CameraModel
 from fearguard.vision import ground_lanes as gl
 from fearguard.vision.frame import FramePipeline, find_lanes, prepare
-from fearguard.vision.lanes import road_region
+from fearguard.vision.lanes import default_lines, road_region
+from fearguard.vision.obstacle import detect_obstacle
+from fearguard.vision.occlusion import road_appearance, surface_maps
 
 LANE = gl.GroundLaneSpec(lane_width_m=0.236, near_m=0.07, far_m=0.5, aim_m=0.25)
 W, H = 320, 240
@@ -248,6 +250,54 @@ def test_the_interior_stops_at_the_white_edge_line_where_the_fit_strays_beyond_i
     walled = gl.lane_interior(lanes, grid, region, LANE, white)
     assert not (walled & (lateral[band] < -h)).any()
     assert walled[lateral[band] > 0].any()  # the lane itself stays
+
+
+def _search_a_strayed_interior(frame: np.ndarray, wall: bool) -> object:
+    """The object search over the interior of a lane whose right fit strayed 12 cm past the white tape (as at a tape
+    corner or a tile of another tint); ``wall``: the white tape was seen (else the tape's paint went unnoticed)."""
+    region = road_region(W, H, CAMERA)
+    grid = gl.ground_grid(CAMERA, region.top_v_px, region.bottom_v_px, LANE.far_m)
+    h = LANE.lane_width_m / 2
+    lanes = gl.GroundLanes(_boundary(np.array([0.0, 0.0, 1.0, -h])), _boundary(np.array([0.0, 0.0, 1.0, h + 0.12])), 1.0, 100)
+    _, lateral = floor_lateral(math.inf)
+    band = slice(region.top_v_px, region.bottom_v_px + 1)
+    white = (lateral[band] <= -h) & (lateral[band] >= -h - 0.05) if wall else np.zeros(lateral[band].shape, bool)
+    interior = gl.lane_interior(lanes, grid, region, LANE, white)
+    p = prepare(frame, CAMERA)
+    features = np.zeros_like(p.gray)
+    features[band][white] = 255
+    maps = surface_maps(p.gray, p.hls, features, p.region)
+    lines = default_lines(p.region)
+    road = road_appearance(p.gray, p.hls, p.region, *lines, maps, interior=interior & (lateral[band] > -h))
+    return detect_obstacle(maps, road, p.region, *lines, p.camera, p.scale, interior=interior, smooth_objects=False,
+                           edge_paint=white)
+
+
+def _with_verge(frame: np.ndarray) -> np.ndarray:
+    """The frame with green grass beyond the white tape (the verge: coloured, so not road)."""
+    x, lateral = floor_lateral(math.inf)
+    out = frame.copy()
+    out[np.isfinite(x) & (lateral < -LANE.lane_width_m / 2 - 0.05)] = (40, 140, 60)
+    return out
+
+
+def test_tape_and_verge_let_into_the_lane_interior_are_no_object_but_an_object_in_the_lane_is() -> None:
+    """Flat ground is no object: where the lane model did not see the edge line, the interior takes in the tape and the
+    verge beyond it, which enter from the interior's edge and go on past it (an object standing in the lane has road
+    on both sides). Before, this read as an object at the foot of the frame, and the robot stopped. A cone standing
+    in the lane of that same interior is still found at its range, and a board across the whole interior is found too
+    (no farther than its foot: the tape below it stays one candidate with it, which reads nearer)."""
+    floor = _with_verge(taped_floor(math.inf))
+    assert _search_a_strayed_interior(floor, wall=False) is None
+    cone = _search_a_strayed_interior(_with_verge(taped_floor(math.inf, cone_at_m=0.3)), wall=False)
+    assert cone is not None and cone.range_m == pytest.approx(0.3, abs=0.03)
+    x, _ = floor_lateral(math.inf)
+    wide = floor.copy()
+    v0 = int(np.nanargmin(np.abs(x[:, W // 2] - 0.3)))
+    wide[v0 - 30 : v0 + 1] = (0, 90, 240)  # an orange board across the whole picture 0.3 m ahead
+    board = _search_a_strayed_interior(wide, wall=False)
+    assert board is not None and board.range_m <= 0.33
+    assert _search_a_strayed_interior(floor, wall=True) is None  # the wall keeps it out anyway
 
 
 @pytest.mark.parametrize("light", [(0.75, 1.3, 0.85), (1.2, 0.7, 1.15), (0.7, 1.0, 1.3)], ids=["green", "purple", "warm"])

@@ -182,6 +182,7 @@ class Lanes:
     curves_px: tuple[np.ndarray | None, np.ndarray | None] | None = None  # ... as polylines in working pixels (the overlay's)
     interior: np.ndarray | None = None  # ... the lane between them, over the road rows (the road model's, the object search's)
     hls_white: np.ndarray | None = None  # the road rows' HLS under white light, when the ground model measured a tinted one
+    white: np.ndarray | None = None  # ... its white (edge-line) paint over the road rows (the object search's)
 
 
 @dataclass(frozen=True)
@@ -224,7 +225,7 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
             return Lanes(left=fit.left, right=fit.right, seen_left=fit.left, seen_right=fit.right, agreement_left=fit.agreement[0],
                          agreement_right=fit.agreement[1], features=fit.features, paint_integral=fit.paint_integral, aim_row_px=v_aim,
                          lane_width_px=width_px, ground=fit.lanes, out_of_view=fit.out_of_view, expected=fit.expected,
-                         curves_px=fit.curves_px, interior=fit.interior, hls_white=fit.hls_white)
+                         curves_px=fit.curves_px, interior=fit.interior, hls_white=fit.hls_white, white=fit.white)
     det = detect_lanes(p.hls, region, p.mask, trackers.lanes.current(region))
     v_aim = lookahead_row(region)
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
@@ -267,7 +268,7 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     # tiled floors it serves a smoother tile is no object
     if p.camera.mount_height_m is not None and (lanes.ground is None or lanes.interior is not None):
         obstacle = detect_obstacle(surface, road, p.region, expected_l, expected_r, p.camera, p.scale, interior=lanes.interior,
-                                   smooth_objects=lanes.ground is None)
+                                   smooth_objects=lanes.ground is None, edge_paint=lanes.white)
     obstacle = trackers.obstacles.update(obstacle)
     lead = lead_from_box(box, p.camera) if box is not None else None
     return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference, obstacle=obstacle)

@@ -507,6 +507,8 @@ class GroundFit:
     interior: np.ndarray | None = None  # bool over the road rows: pixels whose ground lies inside the lane, inset from its
     #   boundaries, as far as the markings were seen (the road model's samples, the object search)
     hls_white: np.ndarray | None = None  # the HLS image under white light when a tinted one was measured (paint_light)
+    white: np.ndarray | None = None  # bool over the road rows: the white (edge-line) paint, the interior's wall
+
 
 
 def ground_lanes_in_image(
@@ -535,8 +537,9 @@ def ground_lanes_in_image(
     hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid),
               lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid))
     curves = tuple(_image_polyline(b, cam, spec) for b in (lanes.left, lanes.right))
+    edge_paint = white[band] > 0
     return GroundFit(lanes, left, right, agree, features, integral, hidden, expected_points(lanes, cam, region, spec),
-                     (curves[0], curves[1]), lane_interior(lanes, grid, region, spec, white[band] > 0), hls_white)
+                     (curves[0], curves[1]), lane_interior(lanes, grid, region, spec, edge_paint), hls_white, edge_paint)
 
 
 def _image_polyline(boundary: GroundBoundary | None, camera: CameraModel, spec: GroundLaneSpec) -> np.ndarray | None:

@@ -7,6 +7,8 @@ is not inside the lane), darker than any shadow, brighter and smoother, or smoot
 foreign pixels cover ``MIN_SHARE`` of the interior width is an object row; the nearest stretch of ``MIN_ROWS`` such rows
 is the object, standing on its lowest row. Its range is the flat-ground range of that row,
 D = H / tan(α + arctan((v − v0) / f_y)) (``CameraModel.ground_range_m``), so it needs the camera's mounting height.
+In the bending lane model's interior, a candidate that enters from the interior's edge and goes on past it is the lane's
+edge (tape or verge let in where the edge line went unseen), not an object: ``_edge_runs``.
 """
 
 from __future__ import annotations
@@ -39,6 +41,13 @@ MIN_ROWS = 4  # [rows] consecutive object rows that make an object (one row is n
 CONFIRM_FRAMES = 3  # [frames] over time an object counts once seen this many frames in a row (0.1 s at 30 Hz): a single
 #   frame's foreign patch — a tile seam beside a boundary the lane model placed a little off — is no object
 CONFIRM_AGREE = 0.25  # [-] ... each sighting's range within this share of the one before (the same object, approaching)
+SPILL_M = 0.03  # [m] read as flat ground at its row: a foreign run that reaches the lane interior's edge and goes on this
+#   far past it, over ground that is not road (foreign, or the white edge line's paint; yellow paint stops it), spills
+#   out of the lane on that row ...
+SPILL_FILL = 0.75  # [-] ... (this share of the pixels there: the patch maps blur a tape's edges) ...
+SPILL_SHARE = 0.5  # [-] ... and a candidate spilling out on one side on this share of its rows is the lane's edge (tape
+#   or verge the interior let in where the lane model did not see the edge line), not an object standing in the lane
+EDGE_PASSES = 3  # [-] the search looks again without such an edge at most this often (then what is left is judged as it is)
 
 
 @dataclass(frozen=True)
@@ -74,7 +83,7 @@ def foreign_mask(maps: SurfaceMaps, road: RoadAppearance, columns: slice = slice
 
 def detect_obstacle(
     maps: SurfaceMaps, road: RoadAppearance, region: RoadRegion, left: LaneLine, right: LaneLine, camera: CameraModel,
-    scale: float, *, interior: np.ndarray | None = None, smooth_objects: bool = True,
+    scale: float, *, interior: np.ndarray | None = None, smooth_objects: bool = True, edge_paint: np.ndarray | None = None,
 ) -> Obstacle | None:
     """The nearest object in the ego lane of a working image (None when the lane interior looks like road).
 
@@ -97,17 +106,99 @@ def detect_obstacle(
         inside = interior[:, c0:c1]
         width = inside.sum(axis=1)
     foreign = foreign_mask(maps, road, slice(c0, c1), smooth_objects=smooth_objects) & inside
-    count = foreign.sum(axis=1)
-    hit = (width > 0) & (count >= np.maximum(MIN_PX, MIN_SHARE * width))
-    bottom = _lowest_stretch_end(hit, MIN_ROWS)
-    if bottom is None:
-        return None
+    for k in range(EDGE_PASSES + 1):
+        count = foreign.sum(axis=1)
+        hit = (width > 0) & (count >= np.maximum(MIN_PX, MIN_SHARE * width))
+        bottom = _lowest_stretch_end(hit, MIN_ROWS)
+        if bottom is None:
+            return None
+        if interior is None or k == EDGE_PASSES:
+            break
+        edge = _edge_runs(maps, road, interior, edge_paint, hit, bottom, (c0, c1), camera, scale, smooth_objects)
+        if edge is None:
+            break
+        foreign &= ~edge  # the lane's edge let in: look again without it (an object may stand beside it)
     u = c0 + np.flatnonzero(foreign[bottom - MIN_ROWS + 1 : bottom + 1].any(axis=0))
     v_frame = (rows[bottom] + 1.0) * scale  # the object stands on the lower edge of its lowest row
     u_left, u_right = u.min() * scale, (u.max() + 1.0) * scale
     range_m = camera.ground_range_m(v_frame)
     return Obstacle(float(u_left), float(u_right), float(v_frame), camera.bearing_deg(0.5 * (u_left + u_right)),
                     range_m if range_m is not None and math.isfinite(range_m) else None)
+
+
+def _edge_runs(
+    maps: SurfaceMaps, road: RoadAppearance, interior: np.ndarray, edge_paint: np.ndarray | None, hit: np.ndarray,
+    bottom: int, columns: tuple[int, int], camera: CameraModel, scale: float, smooth_objects: bool,
+) -> np.ndarray | None:
+    """Is the candidate ending on row ``bottom`` the lane's own edge rather than an object standing in the lane? Then
+    the foreign runs it is made of at that edge (bool over the band rows and the searched ``columns`` [c0, c1)), else
+    None.
+
+    An object standing in the lane is bounded inside it: on its rows the road shows on both sides of it. Where the lane
+    model did not see the edge line (the next tile's tape under another tint, a fit that strays at a tape corner) the
+    interior can take in the tape and the verge beyond it: flat ground that enters from the interior's edge and goes on
+    past it. So a row *spills* when its foreign run reaches one lateral edge of the interior (not both: an object wider
+    than the lane, a car, reaches both; the picture's border is no edge of the lane) and the ground beyond that edge
+    goes on foreign, or white edge-line paint (``edge_paint``), for SPILL_M (SPILL_FILL of it), read as flat ground at
+    that row. Yellow paint and road stop it: a yellow duck may stand by the centre line, and one in the lane leaves the
+    road beside it. A candidate spilling on one side on SPILL_SHARE of its rows (those not covered from edge to edge;
+    a row whose ground beyond lies outside the picture counts as not spilling) is that side's edge: its runs at that
+    edge, and where the interior meets the picture's border on that side, its runs there too, are returned."""
+    top = bottom
+    while top > 0 and hit[top - 1]:
+        top -= 1
+    width_px = interior.shape[1]
+    pitch = math.radians(camera.pitch_deg)
+    height = camera.mount_height_m if camera.mount_height_m is not None else 1.0
+    spilled: dict[bool, list[int]] = {True: [], False: []}  # rows spilling at the left edge / at the right edge
+    judged = 0  # rows not covered from edge to edge (those say nothing about a side)
+    runs: dict[tuple[int, bool], tuple[int, int]] = {}  # (row, left?) -> the edge run's columns [lo, hi)
+    for i in range(top, bottom + 1):
+        cols = np.flatnonzero(interior[i])
+        x = camera.ground_range_m((maps.top_v_px + i + 0.5) * scale)
+        if len(cols) == 0 or x is None:
+            continue
+        a0, a1 = int(cols[0]), int(cols[-1])
+        foreign = foreign_mask(_row_maps(maps, i), road, smooth_objects=smooth_objects)[0]
+        touch_left, touch_right = bool(foreign[a0]), bool(foreign[a1])  # a run reaches that end of the interior's row
+        at_left, at_right = touch_left and a0 > 0, touch_right and a1 < width_px - 1  # ... an edge of the lane, not the
+        if at_left and at_right:  # picture's border
+            continue  # as wide as the interior: says nothing about a side
+        judged += 1
+        if touch_left == touch_right and not (at_left or at_right):
+            continue  # bounded inside the interior, or from border to border of the picture
+        left_side = at_left or (touch_left and not at_right)
+        run = foreign[a0 : a1 + 1] & interior[i, a0 : a1 + 1]
+        n = len(run) if run.all() else int(np.argmin(run if left_side else run[::-1]))  # the run's width from that end
+        runs[(i, left_side)] = (a0, a0 + n) if left_side else (a1 + 1 - n, a1 + 1)
+        if not (at_left or at_right):
+            continue  # it runs out of the picture there: the edge's continuation, if any, is not seen
+        m_per_px = (x * math.cos(pitch) + height * math.sin(pitch)) * scale / camera.fx_px  # lateral ground per px there
+        reach = max(1, math.ceil(SPILL_M / m_per_px))
+        lo, hi = (a0 - reach, a0) if left_side else (a1 + 1, a1 + 1 + reach)
+        if lo < 0 or hi > width_px:
+            continue  # beyond the edge lies outside the picture: unknown
+        pi = maps.paint_integral  # the marking pixels of that row, lo..hi-1
+        paint = np.diff(pi[i + 1, lo : hi + 1] - pi[i, lo : hi + 1]) > 0
+        white = edge_paint[i, lo:hi] if edge_paint is not None else np.zeros(hi - lo, bool)
+        goes_on = (foreign[lo:hi] & ~(paint & ~white)) | white  # yellow paint (a marking, not white) stops it
+        if goes_on.mean() >= SPILL_FILL:
+            spilled[left_side].append(i)
+    side = len(spilled[True]) >= len(spilled[False])
+    if not spilled[side] or len(spilled[side]) < SPILL_SHARE * judged:
+        return None
+    c0, c1 = columns
+    edge = np.zeros((interior.shape[0], c1 - c0), bool)
+    for (i, left_side), (lo, hi) in runs.items():
+        if left_side == side:
+            edge[i, lo - c0 : hi - c0] = True
+    return edge
+
+
+def _row_maps(maps: SurfaceMaps, i: int) -> SurfaceMaps:
+    """The maps of one band row (as a one-row band)."""
+    return SurfaceMaps(maps.top_v_px + i, maps.grey[i : i + 1], maps.saturation[i : i + 1], maps.roughness[i : i + 1],
+                       maps.hue[i : i + 1], maps.paint_integral[i : i + 2])
 
 
 def _lowest_stretch_end(hit: np.ndarray, min_rows: int) -> int | None:
