@@ -510,7 +510,6 @@ class GroundFit:
     white: np.ndarray | None = None  # bool over the road rows: the white (edge-line) paint, the interior's wall
 
 
-
 def ground_lanes_in_image(
     hls: np.ndarray, mask: np.ndarray, region: RoadRegion, camera: CameraModel, spec: GroundLaneSpec, priors: GroundLanes | None,
     bgr: np.ndarray | None = None,

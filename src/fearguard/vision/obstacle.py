@@ -100,12 +100,14 @@ def detect_obstacle(
         cols = np.arange(c0, c1)[None, :]
         inside = (cols >= lo[:, None]) & (cols < hi[:, None])
         width = np.maximum(hi - lo, 0)
+        foreign = foreign_mask(maps, road, slice(c0, c1), smooth_objects=smooth_objects) & inside
     else:
         spans = np.flatnonzero(interior.any(axis=0))
         c0, c1 = (int(spans[0]), int(spans[-1]) + 1) if len(spans) else (0, 0)  # only the columns the interior covers
         inside = interior[:, c0:c1]
         width = inside.sum(axis=1)
-    foreign = foreign_mask(maps, road, slice(c0, c1), smooth_objects=smooth_objects) & inside
+        every = foreign_mask(maps, road, smooth_objects=smooth_objects)  # the whole width: the edge test looks beyond it
+        foreign = every[:, c0:c1] & inside
     for k in range(EDGE_PASSES + 1):
         count = foreign.sum(axis=1)
         hit = (width > 0) & (count >= np.maximum(MIN_PX, MIN_SHARE * width))
@@ -114,7 +116,7 @@ def detect_obstacle(
             return None
         if interior is None or k == EDGE_PASSES:
             break
-        edge = _edge_runs(maps, road, interior, edge_paint, hit, bottom, (c0, c1), camera, scale, smooth_objects)
+        edge = _edge_runs(maps, every, interior, edge_paint, hit, bottom, (c0, c1), camera, scale)
         if edge is None:
             break
         foreign &= ~edge  # the lane's edge let in: look again without it (an object may stand beside it)
@@ -127,12 +129,12 @@ def detect_obstacle(
 
 
 def _edge_runs(
-    maps: SurfaceMaps, road: RoadAppearance, interior: np.ndarray, edge_paint: np.ndarray | None, hit: np.ndarray,
-    bottom: int, columns: tuple[int, int], camera: CameraModel, scale: float, smooth_objects: bool,
+    maps: SurfaceMaps, every: np.ndarray, interior: np.ndarray, edge_paint: np.ndarray | None, hit: np.ndarray,
+    bottom: int, columns: tuple[int, int], camera: CameraModel, scale: float,
 ) -> np.ndarray | None:
     """Is the candidate ending on row ``bottom`` the lane's own edge rather than an object standing in the lane? Then
     the foreign runs it is made of at that edge (bool over the band rows and the searched ``columns`` [c0, c1)), else
-    None.
+    None. ``every``: ``foreign_mask`` over the band's whole width (the ground beyond the interior's edge is judged too).
 
     An object standing in the lane is bounded inside it: on its rows the road shows on both sides of it. Where the lane
     model did not see the edge line (the next tile's tape under another tint, a fit that strays at a tape corner) the
@@ -159,7 +161,7 @@ def _edge_runs(
         if len(cols) == 0 or x is None:
             continue
         a0, a1 = int(cols[0]), int(cols[-1])
-        foreign = foreign_mask(_row_maps(maps, i), road, smooth_objects=smooth_objects)[0]
+        foreign = every[i]
         touch_left, touch_right = bool(foreign[a0]), bool(foreign[a1])  # a run reaches that end of the interior's row
         at_left, at_right = touch_left and a0 > 0, touch_right and a1 < width_px - 1  # ... an edge of the lane, not the
         if at_left and at_right:  # picture's border
@@ -193,12 +195,6 @@ def _edge_runs(
         if left_side == side:
             edge[i, lo - c0 : hi - c0] = True
     return edge
-
-
-def _row_maps(maps: SurfaceMaps, i: int) -> SurfaceMaps:
-    """The maps of one band row (as a one-row band)."""
-    return SurfaceMaps(maps.top_v_px + i, maps.grey[i : i + 1], maps.saturation[i : i + 1], maps.roughness[i : i + 1],
-                       maps.hue[i : i + 1], maps.paint_integral[i : i + 2])
 
 
 def _lowest_stretch_end(hit: np.ndarray, min_rows: int) -> int | None:
