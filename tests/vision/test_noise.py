@@ -89,3 +89,13 @@ def test_deep_shade_keeps_the_lane_but_the_same_dimness_with_night_noise_loses_s
         assert a_night.evidence.visibility < a_shade.evidence.visibility, path.name
         lower += a_night.lane_confidence < a_shade.lane_confidence
     assert lower >= 0.8 * len(paths)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(3, 40), st.integers(3, 40), st.integers(0, 2**32 - 1))
+def test_the_filter_is_immerkaers_kernel_exactly(h: int, w: int, seed: int) -> None:
+    grey = np.random.default_rng(seed).integers(0, 256, (h, w), dtype=np.uint8)
+    kernel = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)  # N of the module docstring
+    response = np.abs(cv2.filter2D(grey, cv2.CV_32F, kernel, borderType=cv2.BORDER_REPLICATE).astype(np.float64))
+    expected = math.sqrt(math.pi / 2.0) * response.mean() / 6.0
+    assert noise_grey(grey, np.full((h, w), 255, np.uint8)) == pytest.approx(expected, rel=1e-12, abs=1e-12)

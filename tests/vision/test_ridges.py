@@ -69,3 +69,18 @@ def _long_runs_reference(ok: np.ndarray, min_rows: int) -> np.ndarray:
 @given(arrays(bool, st.tuples(st.integers(1, 4), st.integers(0, 30))), st.integers(1, 5))
 def test_only_runs_of_enough_consecutive_rows_are_kept(ok: np.ndarray, min_rows: int) -> None:
     assert np.array_equal(ridges._in_long_runs(ok, min_rows), _long_runs_reference(ok, min_rows))
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(8, 60), st.integers(20, 90), st.integers(0, 2**32 - 1), st.floats(0.0, 1.0))
+def test_the_row_limited_top_hat_equals_the_full_one_on_its_rows(h: int, w: int, seed: int, share: float) -> None:
+    """The top-hat is row by row: computed on a subset of rows (the yellow test's), those rows are the full image's."""
+    from fearguard.vision.lanes import _ridges, road_region
+
+    rng = np.random.default_rng(seed)
+    channel = rng.integers(0, 256, (h, w), dtype=np.uint8)
+    rows = np.flatnonzero(rng.random(h) < share)
+    for region in (None, road_region(w, h)):
+        full, part = _ridges(channel, region), _ridges(channel, region, rows)
+        assert np.array_equal(part[rows], full[rows])
+        assert not np.delete(part, rows, axis=0).any()

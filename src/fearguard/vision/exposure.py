@@ -20,7 +20,6 @@ import numpy as np
 
 SATURATED_MIN = 250  # [grey level] at or above: clipped white
 BLACK_MAX = 10  # [grey level] at or below: crushed black
-_NOISE_KERNEL = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
 _LEVELS = np.arange(256, dtype=np.float64)
 
 
@@ -57,6 +56,7 @@ def noise_grey(gray: np.ndarray, mask: np.ndarray) -> float:
     """Immerkær's noise estimate (grey levels) over the mask's pixels; NaN if the image is too small for the 3×3 kernel."""
     if min(gray.shape[:2]) < 3:
         return float("nan")
-    # 16-bit integers hold the response exactly (|I ∗ N| ≤ 16 · 255) and cost half the float32 filter
-    response = np.abs(cv2.filter2D(gray, cv2.CV_16S, _NOISE_KERNEL, borderType=cv2.BORDER_REPLICATE))
+    # N is the separable second-derivative Sobel kernel (∂²/∂u²∂v², 3×3): OpenCV's Sobel computes it exactly in 16-bit
+    # integers (|I ∗ N| ≤ 16 · 255) at ~0.4 of a general filter2D's cost
+    response = np.abs(cv2.Sobel(gray, cv2.CV_16S, 2, 2, ksize=3, borderType=cv2.BORDER_REPLICATE))
     return float(np.sqrt(np.pi / 2.0) * cv2.mean(response, mask)[0] / 6.0)

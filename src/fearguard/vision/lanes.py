@@ -183,13 +183,16 @@ def marking_features(
     the caller already has it.
     """
     light = smoothed_light(hls) if light is None else light
-    ridge_l, ridge_s = _ridges(light, region), _ridges(hls[:, :, 2], region)
+    ridge_l = _ridges(light, region)
     # every test on whole uint8 images (OpenCV's vectorised loops; numpy's on the strided HLS channels cost ~5×)
     background = cv2.subtract(light, ridge_l)  # the opening: the road's lightness under the marking (≤ light: exact)
-    bright = cv2.compare(ridge_l, cv2.LUT(background, _BRIGHT_MIN), cv2.CMP_GE)
+    bright = cv2.bitwise_and(cv2.compare(ridge_l, cv2.LUT(background, _BRIGHT_MIN), cv2.CMP_GE), mask)
     yellow = cv2.inRange(hls, (YELLOW_HUE[0], 0, YELLOW_SAT_MIN), (YELLOW_HUE[1], 255, 255))
-    yellow &= cv2.compare(light, YELLOW_LIGHT_MIN, cv2.CMP_GE) & cv2.compare(ridge_s, RIDGE_MIN, cv2.CMP_GE)
-    return cv2.bitwise_and(bright | yellow, mask)
+    yellow &= cv2.compare(light, YELLOW_LIGHT_MIN, cv2.CMP_GE) & mask
+    rows = np.flatnonzero(cv2.reduce(yellow, 1, cv2.REDUCE_MAX))  # the saturation ridge matters only on these rows
+    if len(rows):
+        yellow &= cv2.compare(_ridges(hls[:, :, 2], region, rows), RIDGE_MIN, cv2.CMP_GE)
+    return bright | yellow
 
 
 # the least ridge that is bright over each background lightness b: ≥ RIDGE_MIN and ≥ RIDGE_RATIO·b (as float, rounded up)
@@ -201,17 +204,20 @@ def smoothed_light(hls: np.ndarray) -> np.ndarray:
     return cv2.GaussianBlur(hls[:, :, 1], (3, 3), 0)
 
 
-def _ridges(channel: np.ndarray, region: RoadRegion | None) -> np.ndarray:
+def _ridges(channel: np.ndarray, region: RoadRegion | None, rows: np.ndarray | None = None) -> np.ndarray:
     """Top-hat of one channel: the near window on the near half of the region's rows, the far window elsewhere. The
-    top-hat is row by row, so each window runs on its own rows only (the same result, half the work)."""
-    w = channel.shape[1]
-    if region is None:
-        return _tophat(channel, TOPHAT_WIDTH * w)
-    split, end = (region.top_v_px + region.bottom_v_px) // 2, min(region.bottom_v_px + 1, len(channel))
-    out = np.empty_like(channel)
-    for lo, hi, window in ((0, split, region.far_tophat), (split, end, region.near_tophat), (end, len(channel), region.far_tophat)):
-        if hi > lo:
-            out[lo:hi] = _tophat(channel[lo:hi], window * w)
+    top-hat is row by row, so each window runs on its own rows only (the same result, half the work), and ``rows``
+    (sorted indices) limits it to the rows a caller needs (the others are 0)."""
+    w, n = channel.shape[1], len(channel)
+    windows: tuple[tuple[int, int, float], ...] = ((0, n, TOPHAT_WIDTH),)
+    if region is not None:
+        split, end = (region.top_v_px + region.bottom_v_px) // 2, min(region.bottom_v_px + 1, n)
+        windows = ((0, split, region.far_tophat), (split, end, region.near_tophat), (end, n, region.far_tophat))
+    out = np.zeros_like(channel)
+    for lo, hi, window in windows:
+        mine = slice(lo, hi) if rows is None else rows[np.searchsorted(rows, lo) : np.searchsorted(rows, hi)]
+        if hi > lo and (rows is None or len(mine)):
+            out[mine] = _tophat(channel[mine], window * w)
     return out
 
 
