@@ -11,7 +11,9 @@ share of each stage. One core: OpenCV is limited to one thread. Goal: ≤ 5 ms m
 ``--against SRC``: the full per-frame perception (``Perception.perceive``: lanes, confidence, occlusion, lead, QR every
 3rd frame) of this tree and of the tree whose ``src`` folder is SRC, each in its own worker process, timed round by round
 alternately with a bare Canny + probabilistic Hough pass over the whole 640×480 frame (in this process) — the ratios
-new/old and new/Hough come from one interleaved run, so machine load affects all three alike.
+new/old and new/Hough come from one interleaved run, so machine load affects all three alike. It also prints new/old
+round by round (median and quartiles): the spread of a tree against itself (``--against`` its own ``src``) is the noise
+floor, about ±3 % in the median here.
 """
 
 from __future__ import annotations
@@ -105,7 +107,7 @@ def canny_hough_ms(frames: list[np.ndarray], count: int) -> float:
     return (time.perf_counter() - start) / count * 1e3
 
 
-def compare(against: Path, rounds: int = 12, per_round: int = 42) -> None:
+def compare(against: Path, rounds: int = 40, per_round: int = 42) -> None:
     """Per-frame perception of this tree vs the tree at ``against`` and vs Canny + Hough, interleaved round by round."""
     here = Path(__file__).resolve().parents[1] / "src"
     workers = {name: subprocess.Popen([sys.executable, "-c", WORKER, str(src), str(DATA)], stdin=subprocess.PIPE,
@@ -129,15 +131,18 @@ def compare(against: Path, rounds: int = 12, per_round: int = 42) -> None:
     print(f"640×480 per-frame perception (mean per round, median of {rounds} rounds): new {med['new']:.2f} ms, "
           f"old ({against}) {med['old']:.2f} ms, Canny + HoughP {med['hough']:.2f} ms")
     print(f"   ratio new/old {med['new'] / med['old']:.3f} (goal ≤ 1.05), new/Canny+Hough {med['new'] / med['hough']:.3f} (goal ≤ 1)")
+    paired = statistics.quantiles([n / o for n, o in zip(times["new"], times["old"], strict=True)], n=4)  # same-round pairs
+    print(f"   new/old round by round: median {paired[1]:.3f}, quartiles {paired[0]:.3f}–{paired[2]:.3f}")
 
 
 def main() -> None:
     cv2.setNumThreads(1)
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--against", type=Path, help="src folder of another fearguard tree to compare with")
+    parser.add_argument("--rounds", type=int, default=40, help="interleaved rounds of --against (default 40, ~30 s)")
     args = parser.parse_args()
     if args.against is not None:
-        compare(args.against)
+        compare(args.against, args.rounds)
         return
     for size in ((640, 480), (1280, 720)):
         bench(size)
