@@ -221,7 +221,7 @@ def marking_masks(
     gains, hls_white = None, None
     if bgr is not None:  # judged under the light measured off the paint (this frame's, or the one held from before)
         on_road = mask[band] > 0
-        found = paint_gains(bgr[band], ridged & on_road, on_road, white_b)
+        found = paint_gains(bgr[band], ridged & on_road, on_road, white_b, _looks_yellow)
         gains = found if found is not None else held_gains if held_gains is not None else np.ones(3)
         if not is_neutral(gains):
             hls_white = hls.copy()
@@ -268,6 +268,11 @@ def _paint_colours(hls: np.ndarray, light: np.ndarray) -> tuple[np.ndarray, np.n
     """(white-coloured, yellow) bool masks by colour alone: unsaturated; yellow hue, saturated and not dark."""
     hue, sat = hls[..., 0], hls[..., 2]
     return sat <= WHITE_SAT_MAX, (hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]) & (sat >= YELLOW_SAT_MIN) & (light >= YELLOW_LIGHT_MIN)
+
+
+def _looks_yellow(hls: np.ndarray) -> np.ndarray:
+    """bool: yellow paint by colour alone (its lightness read off the HLS image itself)."""
+    return _paint_colours(hls, hls[..., 1])[1]
 
 
 def inner_edges(paint: np.ndarray, lane_is_right: bool) -> np.ndarray:

@@ -7,7 +7,11 @@ light (von Kries); dividing by the colour of the white tape — the light's colo
 Which pixels are the white tape: among the bright marking-like pixels (ridges) the two paints differ most in blue
 against red and green — yellow reflects almost no blue, white all of it — and their ratio is the paints' own whatever
 the light. So the log-chroma b = log(B / √(G·R)) of those pixels is split in two by Otsu's threshold, and the bluer
-class is the white tape when the split is clear: classes at least SPLIT_MIN apart, each a plausible share. The gains
+class is the white tape when the split is clear: classes at least SPLIT_MIN apart, each a plausible share. A split
+that is not clear is taken when its own consequence bears it out: under the light it gives, YELLOW_EXPLAINED of the
+other class reads as yellow paint (``looks_yellow``). A tinted scene is not lit by one multiplicative light alone
+(gym-duckietown's domain randomisation adds light and colours each tile): there the yellow keeps more blue than the
+white tape's light would leave it, and the two paints lie only ~0.5 apart in plain view of both. The gains
 are kept only if they leave the plain road no less grey than it was (a mat or asphalt is near grey under the same
 light): that rejects a split of yellow into pale and saturated dashes with no white tape in view. Gains within
 DEAD_BAND of 1 are 1, and so are they when the plain colours already call WHITE_EXPLAINED of the white class white:
@@ -20,6 +24,8 @@ wheels, and it balances on the whole picture (grass, sky, walls) rather than on 
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import cv2
 import numpy as np
 
@@ -27,6 +33,7 @@ from fearguard.medians import median
 
 MIN_PIXELS = 50  # [-] fewer bright ridge pixels than this (of every 4th pixel): no estimate (nothing painted in view)
 SPLIT_MIN = 0.6  # [log-chroma] the two paints' classes must be this far apart (Duckietown's: 0.9-1.4; one paint: < 0.5)
+YELLOW_EXPLAINED = 0.5  # [-] a split that is not clear: this share of the other class must read as yellow under its light
 SHARE_RANGE = (0.1, 0.9)  # [-] the white class's share of the bright ridge pixels (both paints in view)
 GREY_TOLERANCE = 0.05  # [-] the gains may raise the road's channel spread by at most this
 DEAD_BAND = 0.1  # [-] gains this close to 1 are 1
@@ -56,22 +63,27 @@ def _otsu(values: np.ndarray) -> tuple[float, float, float]:
     return lo + width * (k + 1), float(mean_above[k] - mean_below[k]), float(above[k] / max(total, 1.0))
 
 
-def paint_gains(bgr: np.ndarray, paint: np.ndarray, on_road: np.ndarray, looks_white: np.ndarray) -> np.ndarray | None:
+def paint_gains(
+    bgr: np.ndarray, paint: np.ndarray, on_road: np.ndarray, looks_white: np.ndarray,
+    looks_yellow: Callable[[np.ndarray], np.ndarray] | None = None,
+) -> np.ndarray | None:
     """(B, G, R) gains that make the white paint grey, from the bright marking-like pixels ``paint`` and the rest of
     the road ``on_road`` (bool masks over the BGR image; every 4th pixel is used); ones when the plain colours already
     call most of the white class white (``looks_white``: unsaturated as it is); None when this frame cannot tell (one
-    paint, too few pixels, a split that would tint the road)."""
+    paint, too few pixels, a split that would tint the road, or one that is not clear and not borne out by
+    ``looks_yellow``: an HLS image → bool, yellow paint by colour)."""
     bgr, paint, on_road, looks_white = bgr[::2, ::2], paint[::2, ::2], on_road[::2, ::2], looks_white[::2, ::2]
     px = bgr[paint].astype(np.float64) + 1.0
     if len(px) < MIN_PIXELS:
         return None
     b = np.log(px[:, 0] / np.sqrt(px[:, 1] * px[:, 2]))
     threshold, split, share = _otsu(b)
-    if split < SPLIT_MIN or not SHARE_RANGE[0] <= share <= SHARE_RANGE[1]:
+    clear = split >= SPLIT_MIN
+    if (not clear and looks_yellow is None) or not SHARE_RANGE[0] <= share <= SHARE_RANGE[1]:
         return None
     whites = b > threshold
     if np.count_nonzero(looks_white[paint][whites]) >= WHITE_EXPLAINED * np.count_nonzero(whites):
-        return np.ones(3)  # white light explains the white class
+        return np.ones(3) if clear else None  # white light explains the white class (of a clear split)
     ground = bgr[on_road & ~paint]
     if len(ground) < MIN_PIXELS:
         return None
@@ -80,6 +92,10 @@ def paint_gains(bgr: np.ndarray, paint: np.ndarray, on_road: np.ndarray, looks_w
     road_colour = median(ground, axis=0).astype(np.float64) + 1.0
     if _spread(road_colour * gains) > _spread(road_colour) + GREY_TOLERANCE:
         return None
+    if not clear and looks_yellow is not None:  # the other class must be the yellow paint under this light
+        others = bgr[paint][~whites].reshape(-1, 1, 3)
+        if np.count_nonzero(looks_yellow(balanced_hls(others, gains))) < YELLOW_EXPLAINED * len(others):
+            return None
     return np.ones(3) if float(np.max(np.abs(gains - 1.0))) < DEAD_BAND else gains
 
 
