@@ -7,7 +7,9 @@ light (von Kries); dividing by the colour of the white tape — the light's colo
 Which pixels are the white tape: among the bright marking-like pixels (ridges) the two paints differ most in blue
 against red and green — yellow reflects almost no blue, white all of it — and their ratio is the paints' own whatever
 the light. So the log-chroma b = log(B / √(G·R)) of those pixels is split in two by Otsu's threshold, and the bluer
-class is the white tape when the split is clear: classes at least SPLIT_MIN apart, each a plausible share. A split
+class is the white tape when the split is clear: classes at least SPLIT_MIN apart, each a plausible share, the bluer
+no darker than the other (white paint reflects every channel at least as yellow does; the mat beside a dark tile
+seam is a ridge too, and under a tint as blue as the tape it can outnumber it in the bluer class). A split
 that is not clear is taken when its own consequence bears it out: under the light it gives, YELLOW_EXPLAINED of the
 other class reads as yellow paint (``looks_yellow``). A tinted scene is not lit by one multiplicative light alone
 (gym-duckietown's domain randomisation adds light and colours each tile): there the yellow keeps more blue than the
@@ -82,6 +84,8 @@ def paint_gains(
     if (not clear and looks_yellow is None) or not SHARE_RANGE[0] <= share <= SHARE_RANGE[1]:
         return None
     whites = b > threshold
+    if float(px[whites].sum(axis=1).mean()) < float(px[~whites].sum(axis=1).mean()):
+        return None  # white paint reflects every channel at least as yellow does: a darker bluer class is the mat
     if np.count_nonzero(looks_white[paint][whites]) >= WHITE_EXPLAINED * np.count_nonzero(whites):
         return np.ones(3) if clear else None  # white light explains the white class (of a clear split)
     ground = bgr[on_road & ~paint]
