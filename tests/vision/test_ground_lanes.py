@@ -319,6 +319,34 @@ def test_under_a_tinted_light_the_paint_is_judged_by_its_own_colour(light: tuple
     assert a.steering_deg == pytest.approx(math.degrees(math.asin(LANE.aim_m / (2 * 0.8))), abs=3.0)
 
 
+def test_the_next_tile_s_tape_under_its_own_tint_is_white_as_the_light_was_measured() -> None:
+    """Domain randomisation tints each tile: past 0.35 m the floor is under another light, and there the white tape,
+    divided by the light measured on the near tile, stays too saturated for the plain white test (the lane was lost
+    at curve entries). A ridge on the white tape's side of the frame's split between the paints is white; the yellow
+    tape, beyond it too, is not."""
+    h = LANE.lane_width_m / 2
+    x, lateral = floor_lateral(0.8)
+    near, far = np.array((0.75, 1.3, 0.85)), np.array((0.75, 1.3, 0.65))
+    lit = np.where((np.nan_to_num(x, nan=9.0) > 0.35)[..., None], far, near)
+    frame = np.clip(taped_floor(0.8).astype(np.float64) * lit, 0, 255).astype(np.uint8)
+    p = prepare(frame, CAMERA)
+    r = p.region
+    white, _, gains, hls_white = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    assert gains is not None and not np.allclose(gains, 1.0)
+    step = round(p.camera.width_px / p.hls.shape[1])  # frame pixels per working pixel
+    xs, lat = (a[::step, ::step][: white.shape[0], : white.shape[1]] for a in (x, lateral))
+    rows = np.zeros(white.shape, bool)
+    rows[r.top_v_px : r.bottom_v_px + 1] = True
+    far_rows = rows & (np.nan_to_num(xs, nan=9.0) > 0.4) & (xs < LANE.far_m)
+    far_tape = far_rows & (lat <= -h - 0.01) & (lat >= -h - 0.04)
+    far_yellow = far_rows & (lat >= h) & (lat <= h + 0.025)
+    assert np.count_nonzero(far_tape) > 20
+    balanced = hls_white[..., 2][far_tape]
+    assert np.median(balanced) > gl.WHITE_SAT_MAX  # the plain test would miss it
+    assert np.mean(white[far_tape] > 0) > 0.5
+    assert not np.any(white[far_yellow] > 0)
+
+
 def test_under_white_light_the_colours_are_judged_as_they_are() -> None:
     p = prepare(taped_floor(0.8), CAMERA)
     r = p.region

@@ -33,7 +33,7 @@ from fearguard.vision.lane_tracker import LOST_AFTER_S
 from fearguard.vision.lanes import RIDGE_MIN, YELLOW_SAT_MIN, LaneLine, RoadRegion, smoothed_light
 from fearguard.vision.obstacle import INSET
 from fearguard.vision.occlusion import ROW_STEP
-from fearguard.vision.paint_light import balanced_hls, is_neutral, paint_gains
+from fearguard.vision.paint_light import balanced_hls, blue_chroma, is_neutral, measure_light
 
 HYPOTHESES = 48  # [-] RANSAC hypotheses per side (deterministic: a fixed-seed generator)
 INLIER_M = 0.02  # [m] a point this close to a boundary curve lies on it (tape is 2-5 cm wide)
@@ -221,12 +221,16 @@ def marking_masks(
     gains, hls_white = None, None
     if bgr is not None:  # judged under the light measured off the paint (this frame's, or the one held from before)
         on_road = mask[band] > 0
-        found = paint_gains(bgr[band], ridged & on_road, on_road, white_b, _looks_yellow)
-        gains = found if found is not None else held_gains if held_gains is not None else np.ones(3)
+        measured = measure_light(bgr[band], ridged & on_road, on_road, white_b, _looks_yellow)
+        gains = measured.gains if measured is not None else held_gains if held_gains is not None else np.ones(3)
         if not is_neutral(gains):
             hls_white = hls.copy()
             hls_white[band] = balanced_hls(bgr[band], gains)
             white_b, yellow_b = _paint_colours(hls_white[band], light_band)
+            if measured is not None and measured.white_b_min is not None:
+                # white as the light was measured: a ridge on the white tape's side of this frame's split between the
+                # paints (the next tile's tape, under that tile's own tint, stays too saturated for the plain test)
+                white_b |= (blue_chroma(bgr[band]) > measured.white_b_min) & ~yellow_b
     white[band] = (ridged & white_b) * np.uint8(255)
     yellow[band] = yellow_b * np.uint8(255)
     # an opening removes specks (grass blades, the mat's grain) that no tape is as thin as

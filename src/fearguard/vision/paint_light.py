@@ -18,7 +18,10 @@ are kept only if they leave the plain road no less grey than it was (a mat or as
 light): that rejects a split of yellow into pale and saturated dashes with no white tape in view. Gains within
 DEAD_BAND of 1 are 1, and so are they when the plain colours already call WHITE_EXPLAINED of the white class white:
 then the light is white enough, and a lighter tile or pale dashes taken for the white class tint nothing. A frame
-that cannot tell (one paint in view) keeps the light measured before (ground_lanes.GroundMemory).
+that cannot tell (one paint in view) keeps the light measured before (ground_lanes.GroundMemory). On a frame that
+measured a tint, a ridge on the white tape's side of the split (``Light.white_b_min``) is white tape too, though
+still saturated under the light: domain randomisation gives each tile its own tint, and the next tile's tape, divided
+by the light of the near one's, is too saturated for the plain white test (ground_lanes.marking_masks).
 
 Written by hand (a 64-bin histogram and a few sums): OpenCV's white balance (xphoto) is not in the opencv-python
 wheels, and it balances on the whole picture (grass, sky, walls) rather than on the paint.
@@ -27,6 +30,7 @@ wheels, and it balances on the whole picture (grass, sky, walls) rather than on 
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -65,15 +69,38 @@ def _otsu(values: np.ndarray) -> tuple[float, float, float]:
     return lo + width * (k + 1), float(mean_above[k] - mean_below[k]), float(above[k] / max(total, 1.0))
 
 
+class Light(NamedTuple):
+    """The light measured off one frame's paint."""
+
+    gains: np.ndarray  # (B, G, R): ones for white light
+    white_b_min: float | None  # the split between the paints in b (a ridge bluer than this is on the white tape's side)
+
+
 def paint_gains(
     bgr: np.ndarray, paint: np.ndarray, on_road: np.ndarray, looks_white: np.ndarray,
     looks_yellow: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> np.ndarray | None:
-    """(B, G, R) gains that make the white paint grey, from the bright marking-like pixels ``paint`` and the rest of
-    the road ``on_road`` (bool masks over the BGR image; every 4th pixel is used); ones when the plain colours already
-    call most of the white class white (``looks_white``: unsaturated as it is); None when this frame cannot tell (one
-    paint, too few pixels, a split that would tint the road, or one that is not clear and not borne out by
-    ``looks_yellow``: an HLS image → bool, yellow paint by colour)."""
+    """measure_light's gains (None: this frame cannot tell)."""
+    light = measure_light(bgr, paint, on_road, looks_white, looks_yellow)
+    return None if light is None else light.gains
+
+
+def blue_chroma(bgr: np.ndarray) -> np.ndarray:
+    """b = log(B / √(G·R)) of every pixel (float32)."""
+    px = bgr.astype(np.float32) + 1.0
+    return np.log(px[..., 0] / np.sqrt(px[..., 1] * px[..., 2]))
+
+
+def measure_light(
+    bgr: np.ndarray, paint: np.ndarray, on_road: np.ndarray, looks_white: np.ndarray,
+    looks_yellow: Callable[[np.ndarray], np.ndarray] | None = None,
+) -> Light | None:
+    """The light: (B, G, R) gains that make the white paint grey, and the split between the paints in b, from the
+    bright marking-like pixels ``paint`` and the rest of the road ``on_road`` (bool masks over the BGR image; every
+    4th pixel is used); ones (no split) when the plain colours already call most of the white class white
+    (``looks_white``: unsaturated as it is); None when this frame cannot tell (one paint, too few pixels, a split that
+    would tint the road, or one that is not clear and not borne out by ``looks_yellow``: an HLS image → bool, yellow
+    paint by colour)."""
     bgr, paint, on_road, looks_white = bgr[::2, ::2], paint[::2, ::2], on_road[::2, ::2], looks_white[::2, ::2]
     px = bgr[paint].astype(np.float64) + 1.0
     if len(px) < MIN_PIXELS:
@@ -87,7 +114,7 @@ def paint_gains(
     if float(px[whites].sum(axis=1).mean()) < float(px[~whites].sum(axis=1).mean()):
         return None  # white paint reflects every channel at least as yellow does: a darker bluer class is the mat
     if np.count_nonzero(looks_white[paint][whites]) >= WHITE_EXPLAINED * np.count_nonzero(whites):
-        return np.ones(3) if clear else None  # white light explains the white class (of a clear split)
+        return Light(np.ones(3), None) if clear else None  # white light explains the white class (of a clear split)
     ground = bgr[on_road & ~paint]
     if len(ground) < MIN_PIXELS:
         return None
@@ -100,7 +127,9 @@ def paint_gains(
         others = bgr[paint][~whites].reshape(-1, 1, 3)
         if np.count_nonzero(looks_yellow(balanced_hls(others, gains))) < YELLOW_EXPLAINED * len(others):
             return None
-    return np.ones(3) if float(np.max(np.abs(gains - 1.0))) < DEAD_BAND else gains
+    if float(np.max(np.abs(gains - 1.0))) < DEAD_BAND:
+        return Light(np.ones(3), None)
+    return Light(gains, threshold)
 
 
 def is_neutral(gains: np.ndarray | None) -> bool:
