@@ -97,13 +97,14 @@ def test_two_whites_that_split_weakly_are_no_light() -> None:
 def test_a_bluer_class_darker_than_the_other_is_the_mat_not_the_white_tape() -> None:
     """The mat beside a dark tile seam is a ridge too; under a tint it is as blue against red·green as the white tape
     (both are grey), and where it outnumbers the tape the bluer class's median is the mat's colour, which white light
-    'explains' (unsaturated). That class is darker than the yellow: no white tape, so the frame cannot tell (the light
+    'explains' (unsaturated). That colour is darker than the yellow's: no white tape, so the frame cannot tell (the light
     held from before is kept), rather than 'white light' (loop_empty seed 1 at 1.37 m: the lane lost)."""
-    bgr, paint, road = _scene((0.8, 1.25, 0.85))
-    paint[45:60, :20] = paint[45:60, 30:80] = True  # a band of mat beside a seam, taken for ridges: more than the tape
-    assert _gains(bgr, paint, road) is None
-    paint[45:60, :20] = paint[45:60, 60:80] = False  # half the tape's pixels: the light is measured
-    assert not pl.is_neutral(_gains(bgr, paint, road))
+    for yellow in (YELLOW, (15.0, 140.0, 150.0)):  # and a dim yellow, darker than the bluer class on average
+        bgr, paint, road = _scene((0.8, 1.25, 0.85), yellow_bgr=yellow)
+        paint[45:60, :20] = paint[45:60, 30:80] = True  # a band of mat beside a seam, taken for ridges: more than the tape
+        assert _gains(bgr, paint, road) is None
+        paint[45:60, :20] = paint[45:60, 60:80] = False  # half the tape's pixels: the light is measured
+        assert not pl.is_neutral(_gains(bgr, paint, road))
 
 
 def test_a_white_light_changes_nothing() -> None:

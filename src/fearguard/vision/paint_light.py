@@ -8,9 +8,9 @@ Which pixels are the white tape: among the bright marking-like pixels (ridges) t
 against red and green — yellow reflects almost no blue, white all of it — and their ratio is the paints' own whatever
 the light. So the log-chroma b = log(B / √(G·R)) of those pixels is split in two by Otsu's threshold, and the bluer
 class is the white tape when the split is clear: classes at least SPLIT_MIN apart, each a plausible share, the bluer
-no darker than the other (white paint reflects every channel at least as yellow does; the mat beside a dark tile
-seam is a ridge too, and under a tint as blue as the tape it can outnumber it in the bluer class). A split
-that is not clear is taken when its own consequence bears it out: under the light it gives, YELLOW_EXPLAINED of the
+class's median colour no darker than the other's (white paint reflects every channel at least as yellow does; the
+mat beside a dark tile seam is a ridge too, and under a tint as blue as the tape it can outnumber it in the bluer
+class). A split that is not clear is taken when its own consequence bears it out: under the light it gives, YELLOW_EXPLAINED of the
 other class reads as yellow paint (``looks_yellow``). A tinted scene is not lit by one multiplicative light alone
 (gym-duckietown's domain randomisation adds light and colours each tile): there the yellow keeps more blue than the
 white tape's light would leave it, and the two paints lie only ~0.5 apart in plain view of both. The gains
@@ -111,14 +111,14 @@ def measure_light(
     if (not clear and looks_yellow is None) or not SHARE_RANGE[0] <= share <= SHARE_RANGE[1]:
         return None
     whites = b > threshold
-    if float(px[whites].sum(axis=1).mean()) < float(px[~whites].sum(axis=1).mean()):
+    light = median(px[whites], axis=0)  # the white tape's colour: the light's
+    if float(light.sum()) < float(median(px[~whites], axis=0).sum()):
         return None  # white paint reflects every channel at least as yellow does: a darker bluer class is the mat
     if np.count_nonzero(looks_white[paint][whites]) >= WHITE_EXPLAINED * np.count_nonzero(whites):
         return Light(np.ones(3), None) if clear else None  # white light explains the white class (of a clear split)
     ground = bgr[on_road & ~paint]
     if len(ground) < MIN_PIXELS:
         return None
-    light = median(px[whites], axis=0)
     gains = light.mean() / light
     road_colour = median(ground, axis=0).astype(np.float64) + 1.0
     if _spread(road_colour * gains) > _spread(road_colour) + GREY_TOLERANCE:
