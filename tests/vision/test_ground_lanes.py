@@ -308,8 +308,8 @@ def test_under_a_tinted_light_the_paint_is_judged_by_its_own_colour(light: tuple
     p = prepare(frames[0], CAMERA)
     light_px = gl.smoothed_light(p.hls)
     r = p.region
-    plain_white, plain_yellow, _, _ = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px)
-    white, yellow, gains, _ = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    plain_white, plain_yellow, *_ = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px)
+    white, yellow, gains, *_ = gl.marking_masks(p.hls, light_px, p.mask, r.top_v_px, r.bottom_v_px, p.work)
     assert gains is not None and not np.allclose(gains, 1.0)
     more_white = np.count_nonzero(white) > 3 * max(1, np.count_nonzero(plain_white))
     assert more_white or np.count_nonzero(yellow) > 3 * max(1, np.count_nonzero(plain_yellow))
@@ -319,38 +319,68 @@ def test_under_a_tinted_light_the_paint_is_judged_by_its_own_colour(light: tuple
     assert a.steering_deg == pytest.approx(math.degrees(math.asin(LANE.aim_m / (2 * 0.8))), abs=3.0)
 
 
+def _two_tints(yellow: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """taped_floor(0.8) with the floor past 0.35 m under another tint (a tile of its own colour): (frame, x, lateral)."""
+    x, lateral = floor_lateral(0.8)
+    near, far = np.array((0.75, 1.3, 0.85)), np.array((0.75, 1.3, 0.65))
+    lit = np.where((np.nan_to_num(x, nan=9.0) > 0.35)[..., None], far, near)
+    return np.clip(taped_floor(0.8, yellow=yellow).astype(np.float64) * lit, 0, 255).astype(np.uint8), x, lateral
+
+
+def _far_paint(p: object, x: np.ndarray, lateral: np.ndarray, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+    """(the white tape's, the yellow tape's) working pixels past 0.4 m in the fit rows."""
+    h = LANE.lane_width_m / 2
+    step = round(p.camera.width_px / p.hls.shape[1])  # frame pixels per working pixel
+    xs, lat = (a[::step, ::step][: shape[0], : shape[1]] for a in (x, lateral))
+    rows = np.zeros(shape, bool)
+    rows[p.region.top_v_px : p.region.bottom_v_px + 1] = True
+    far_rows = rows & (np.nan_to_num(xs, nan=9.0) > 0.4) & (xs < LANE.far_m)
+    return far_rows & (lat <= -h - 0.01) & (lat >= -h - 0.04), far_rows & (lat >= h) & (lat <= h + 0.025)
+
+
 def test_the_next_tile_s_tape_under_its_own_tint_is_white_as_the_light_was_measured() -> None:
     """Domain randomisation tints each tile: past 0.35 m the floor is under another light, and there the white tape,
     divided by the light measured on the near tile, stays too saturated for the plain white test (the lane was lost
     at curve entries). A ridge on the white tape's side of the frame's split between the paints is white; the yellow
     tape, beyond it too, is not."""
-    h = LANE.lane_width_m / 2
-    x, lateral = floor_lateral(0.8)
-    near, far = np.array((0.75, 1.3, 0.85)), np.array((0.75, 1.3, 0.65))
-    lit = np.where((np.nan_to_num(x, nan=9.0) > 0.35)[..., None], far, near)
-    frame = np.clip(taped_floor(0.8).astype(np.float64) * lit, 0, 255).astype(np.uint8)
+    frame, x, lateral = _two_tints()
     p = prepare(frame, CAMERA)
     r = p.region
-    white, _, gains, hls_white = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
-    assert gains is not None and not np.allclose(gains, 1.0)
-    step = round(p.camera.width_px / p.hls.shape[1])  # frame pixels per working pixel
-    xs, lat = (a[::step, ::step][: white.shape[0], : white.shape[1]] for a in (x, lateral))
-    rows = np.zeros(white.shape, bool)
-    rows[r.top_v_px : r.bottom_v_px + 1] = True
-    far_rows = rows & (np.nan_to_num(xs, nan=9.0) > 0.4) & (xs < LANE.far_m)
-    far_tape = far_rows & (lat <= -h - 0.01) & (lat >= -h - 0.04)
-    far_yellow = far_rows & (lat >= h) & (lat <= h + 0.025)
+    white, _, gains, hls_white, split = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    assert gains is not None and not np.allclose(gains, 1.0) and split is not None
+    far_tape, far_yellow = _far_paint(p, x, lateral, white.shape)
     assert np.count_nonzero(far_tape) > 20
-    balanced = hls_white[..., 2][far_tape]
-    assert np.median(balanced) > gl.WHITE_SAT_MAX  # the plain test would miss it
+    assert np.median(hls_white[..., 2][far_tape]) > gl.WHITE_SAT_MAX  # the plain test would miss it
     assert np.mean(white[far_tape] > 0) > 0.5
     assert not np.any(white[far_yellow] > 0)
+
+
+def test_a_frame_that_holds_the_light_holds_its_split_too() -> None:
+    """With one paint in view the frame cannot measure the light and keeps the one measured before: its gains and the
+    split between the paints that came with them, so the next tile's tape stays white (GroundMemory keeps both)."""
+    both, _, _ = _two_tints()
+    pb = prepare(both, CAMERA)
+    rb = pb.region
+    _, _, gains, _, split = gl.marking_masks(pb.hls, gl.smoothed_light(pb.hls), pb.mask, rb.top_v_px, rb.bottom_v_px, pb.work)
+    white_only, x, lateral = _two_tints(yellow=False)
+    p = prepare(white_only, CAMERA)
+    r = p.region
+    args = (p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work, gains)
+    held, without = gl.marking_masks(*args, split), gl.marking_masks(*args)
+    assert held.gains is gains and held.split == split
+    far_tape, _ = _far_paint(p, x, lateral, held.white.shape)
+    assert np.mean(held.white[far_tape] > 0) > 0.5
+    assert np.mean(without.white[far_tape] > 0) < 0.1
+    memory = gl.GroundMemory()
+    memory.remember(0.0, gl.GroundLanes(None, None, 1.0, 0, tuple(float(g) for g in gains), split))
+    memory.remember(0.1, gl.GroundLanes(None, None, 1.0, 0))  # a frame without a light of its own (no BGR)
+    assert memory.priors(0.1).light_split == split
 
 
 def test_under_white_light_the_colours_are_judged_as_they_are() -> None:
     p = prepare(taped_floor(0.8), CAMERA)
     r = p.region
-    _, _, gains, _ = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    _, _, gains, *_ = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
     assert gains is not None and np.all(gains == 1.0)
 
 
@@ -382,7 +412,7 @@ def _yellow(frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     rows (the only ones the fit uses, and the only ones judged)."""
     p = prepare(frame, CAMERA)
     r = p.region
-    _, yellow, _, _ = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
+    _, yellow, *_ = gl.marking_masks(p.hls, gl.smoothed_light(p.hls), p.mask, r.top_v_px, r.bottom_v_px, p.work)
     grid = gl.ground_grid(CAMERA, r.top_v_px, r.bottom_v_px, LANE.far_m)
     rows = slice(grid.top_v_px, r.bottom_v_px + 1)
     return yellow[rows], gl.flat_paint(yellow, grid, r.bottom_v_px)[rows]

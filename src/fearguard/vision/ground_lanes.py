@@ -143,6 +143,7 @@ class GroundLanes:
     geometry: float  # [0..1] lane width against the spec (1 with one boundary)
     points: int  # marking points projected
     light_gains: tuple[float, float, float] | None = None  # (B, G, R) gains the paint's colour was judged under (paint_light)
+    light_split: float | None = None  # the split between the paints in b that went with them (paint_light.Light.white_b_min)
 
 
 @dataclass(frozen=True)
@@ -192,16 +193,17 @@ class PaintMasks(NamedTuple):
     yellow: np.ndarray  # uint8 0/255
     gains: np.ndarray | None  # (B, G, R) gains of the light (paint_light): None without the BGR image, ones for white light
     hls_white: np.ndarray | None  # the HLS image with its road rows as under white light, when the light was tinted
+    split: float | None = None  # the split between the paints in b the white tape was judged by (None: the plain test)
 
 
 def marking_masks(
     hls: np.ndarray, light: np.ndarray, mask: np.ndarray, top_v_px: int, bottom_v_px: int,
-    bgr: np.ndarray | None = None, held_gains: np.ndarray | None = None,
+    bgr: np.ndarray | None = None, held_gains: np.ndarray | None = None, held_split: float | None = None,
 ) -> PaintMasks:
     """Paint masks of the road rows and the light they were judged under. White: brighter than its surroundings
     along the row *or* the column (tape crossing the picture on a curve is thin only vertically) and unsaturated;
     yellow: by colour. With the working-size ``bgr``, colour is judged under the light measured off the paint
-    (``paint_light``), or ``held_gains`` (a previous frame's) when this frame cannot tell."""
+    (``paint_light``), or ``held_gains`` and ``held_split`` (a previous frame's) when this frame cannot tell."""
     white = np.zeros(mask.shape, np.uint8)
     yellow = np.zeros(mask.shape, np.uint8)
     w = mask.shape[1]
@@ -218,25 +220,32 @@ def marking_masks(
         ridged[lo - top_v_px : hi - top_v_px] = (ridge >= RIDGE_MIN) & (ridge >= RIDGE_RATIO * (rows.astype(np.int16) - ridge))
     light_band = light[band]
     white_b, yellow_b = _paint_colours(hls[band], light_band)
-    gains, hls_white = None, None
+    gains, hls_white, split_b = None, None, None
     if bgr is not None:  # judged under the light measured off the paint (this frame's, or the one held from before)
         on_road = mask[band] > 0
         measured = measure_light(bgr[band], ridged & on_road, on_road, white_b, _looks_yellow)
-        gains = measured.gains if measured is not None else held_gains if held_gains is not None else np.ones(3)
+        if measured is not None:
+            gains, split_b = measured.gains, measured.white_b_min
+        elif held_gains is not None:
+            gains, split_b = held_gains, held_split
+        else:
+            gains = np.ones(3)
         if not is_neutral(gains):
             hls_white = hls.copy()
             hls_white[band] = balanced_hls(bgr[band], gains)
             white_b, yellow_b = _paint_colours(hls_white[band], light_band)
-            if measured is not None and measured.white_b_min is not None:
-                # white as the light was measured: a ridge on the white tape's side of this frame's split between the
-                # paints (the next tile's tape, under that tile's own tint, stays too saturated for the plain test)
-                white_b |= (blue_chroma(bgr[band]) > measured.white_b_min) & ~yellow_b
+            if split_b is not None:
+                # white as the light was measured: a ridge on the white tape's side of the split between the paints
+                # (the next tile's tape, under that tile's own tint, stays too saturated for the plain test)
+                white_b |= (blue_chroma(bgr[band]) > split_b) & ~yellow_b
+        else:
+            split_b = None
     white[band] = (ridged & white_b) * np.uint8(255)
     yellow[band] = yellow_b * np.uint8(255)
     # an opening removes specks (grass blades, the mat's grain) that no tape is as thin as
     speck = cv2.getStructuringElement(cv2.MORPH_RECT, (3, 3))
     return PaintMasks(cv2.bitwise_and(cv2.morphologyEx(white, cv2.MORPH_OPEN, speck), mask),
-                      cv2.bitwise_and(cv2.morphologyEx(yellow, cv2.MORPH_OPEN, speck), mask), gains, hls_white)
+                      cv2.bitwise_and(cv2.morphologyEx(yellow, cv2.MORPH_OPEN, speck), mask), gains, hls_white, split_b)
 
 
 STANDING_DEPTH_M = 0.15  # [m] a yellow blob whose rows span more ground than this (read as flat) ...
@@ -481,23 +490,24 @@ def agreement(now: GroundBoundary | None, before: GroundBoundary | None, spec: G
 
 class GroundMemory:
     """Last frame's boundaries, each kept as the prior (the gate of its points) until LOST_AFTER_S unseen (the image
-    tracks' limit), and the light's last gains (kept until a frame measures new ones: the light's colour changes
-    slowly, and a frame with one paint in view cannot measure it)."""
+    tracks' limit), and the light's last gains and the split between the paints that came with them (kept until a
+    frame measures new ones: the light's colour changes slowly, and a frame with one paint in view cannot measure it)."""
 
     def __init__(self) -> None:
         self._last: list[tuple[float, GroundBoundary] | None] = [None, None]
         self._gains: tuple[float, float, float] | None = None
+        self._split: float | None = None
 
     def priors(self, t_s: float) -> GroundLanes | None:
         kept = [b if b is not None and t_s - b[0] <= LOST_AFTER_S else None for b in self._last]
-        return GroundLanes(kept[0][1] if kept[0] else None, kept[1][1] if kept[1] else None, 1.0, 0, self._gains)
+        return GroundLanes(kept[0][1] if kept[0] else None, kept[1][1] if kept[1] else None, 1.0, 0, self._gains, self._split)
 
     def remember(self, t_s: float, lanes: GroundLanes) -> None:
         for i, b in enumerate((lanes.left, lanes.right)):
             if b is not None:
                 self._last[i] = (t_s, b)
         if lanes.light_gains is not None:
-            self._gains = lanes.light_gains
+            self._gains, self._split = lanes.light_gains, lanes.light_split
 
 
 @dataclass(frozen=True)
@@ -532,12 +542,13 @@ def ground_lanes_in_image(
     light = smoothed_light(hls)
     before = priors if priors is not None else GroundLanes(None, None, 1.0, 0)
     held = np.array(before.light_gains) if before.light_gains is not None else None
-    white, yellow, gains, hls_white = marking_masks(hls, light, mask, region.top_v_px, region.bottom_v_px, bgr, held)
+    white, yellow, gains, hls_white, split_b = marking_masks(
+        hls, light, mask, region.top_v_px, region.bottom_v_px, bgr, held, before.light_split)
     yellow = flat_paint(yellow, grid, region.bottom_v_px)
     features = cv2.bitwise_or(white, yellow)
     lanes = detect_ground_lanes(white, yellow, grid, region.bottom_v_px, spec, (before.left, before.right))
     if gains is not None:
-        lanes = replace(lanes, light_gains=(float(gains[0]), float(gains[1]), float(gains[2])))
+        lanes = replace(lanes, light_gains=(float(gains[0]), float(gains[1]), float(gains[2])), light_split=split_b)
     band = slice(region.top_v_px, region.bottom_v_px + 1)
     integral = cv2.integral((features[band] > 0).view(np.uint8), sdepth=cv2.CV_64F)
     left, right = (_image_chord(b, cam) for b in (lanes.left, lanes.right))

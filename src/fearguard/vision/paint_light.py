@@ -18,8 +18,8 @@ are kept only if they leave the plain road no less grey than it was (a mat or as
 light): that rejects a split of yellow into pale and saturated dashes with no white tape in view. Gains within
 DEAD_BAND of 1 are 1, and so are they when the plain colours already call WHITE_EXPLAINED of the white class white:
 then the light is white enough, and a lighter tile or pale dashes taken for the white class tint nothing. A frame
-that cannot tell (one paint in view) keeps the light measured before (ground_lanes.GroundMemory). On a frame that
-measured a tint, a ridge on the white tape's side of the split (``Light.white_b_min``) is white tape too, though
+that cannot tell (one paint in view) keeps the light measured before (ground_lanes.GroundMemory). Under a tint
+measured (or held), a ridge on the white tape's side of the split (``Light.white_b_min``) is white tape too, though
 still saturated under the light: domain randomisation gives each tile its own tint, and the next tile's tape, divided
 by the light of the near one's, is too saturated for the plain white test (ground_lanes.marking_masks).
 
