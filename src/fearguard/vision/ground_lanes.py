@@ -51,6 +51,8 @@ RIDGE_RATIO = 0.6  # [-] paint is brighter than the road by this share of its li
 #   pattern: < 0.6; lanes.RIDGE_RATIO, 0.15, is for paint on asphalt in any light)
 RIDGE_WINDOW = (0.12, 0.35)  # [-] of the width: far and near top-hat windows, in rows and in columns
 MAX_CURVATURE = 8.0  # [1/m] a boundary bending tighter (radius < 12.5 cm) is no road edge a car can follow
+MAX_START_ANGLE_DEG = 60.0  # [deg] where a boundary starts (its marking nearest ahead) it runs within this of the car's
+#   heading: on a 0.4 m curve the visible edges start within ~40° of it, a line across the lane (a tile seam, a stop line) at ~90°
 STRAIGHT = 1e-6  # [1/m] |a| below this (radius beyond 500 km) is a straight line
 REFIT_KEEP = 0.9  # [-] share of the hypothesis' (weighted) inliers the least-squares refit must keep to replace it
 NEAR_WEIGHT_FAR = 0.1  # [-] an inlier at the far end of the fit range counts this much of a near one (full weight up to aim_m):
@@ -357,8 +359,9 @@ def _refit(x: np.ndarray, y: np.ndarray) -> np.ndarray | None:
 
 def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: GroundBoundary | None, seed: int = 0) -> GroundBoundary | None:
     """The boundary best supported by the points (x, y): RANSAC over the circles (or lines) through 3 points, one from
-    each third of the points by distance from the camera, refitted on the inliers. A prior (last frame's boundary)
-    gates the points first."""
+    each third of the points by distance from the camera, refitted on the inliers. Only curves that run along the car
+    where they start count (MAX_START_ANGLE_DEG): a tile seam or a stop line across the lane is no boundary, however
+    many points it has. A prior (last frame's boundary) gates the points first."""
     if prior is not None:
         near = np.abs(prior.distance(x, y)) <= GATE_M
         x, y = x[near], y[near]
@@ -374,7 +377,10 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
     px, py = x[picks], y[picks]
     m = np.stack([px * px + py * py, px, py, np.ones_like(px)], axis=2)  # (H, 3, 4): each hypothesis its null vector
     curves = _normalised(np.linalg.svd(m)[2][:, -1, :])
-    curves = curves[np.isfinite(curves).all(axis=1) & (2.0 * np.abs(curves[:, 0]) <= MAX_CURVATURE)]
+    first = np.argmin(px, axis=1)[:, None]  # each hypothesis' point nearest ahead
+    usable = np.isfinite(curves).all(axis=1) & (2.0 * np.abs(curves[:, 0]) <= MAX_CURVATURE)
+    usable &= _runs_along(curves, np.take_along_axis(px, first, 1)[:, 0], np.take_along_axis(py, first, 1)[:, 0])
+    curves = curves[usable]
     if len(curves) == 0:
         return None
     weight = np.clip((spec.far_m - r) / (spec.far_m - spec.aim_m), NEAR_WEIGHT_FAR, 1.0)  # near markings count more
@@ -388,9 +394,25 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
     refit = _refit(x[inlier], y[inlier])
     if refit is not None and 2.0 * abs(refit[0]) <= MAX_CURVATURE:
         refined = np.abs(_distance(refit, x, y)) <= INLIER_M
-        if refined @ weight >= REFIT_KEEP * (inlier @ weight):
+        if refined @ weight >= REFIT_KEEP * (inlier @ weight) and _starts_along(refit, x[refined], y[refined]):
             best, inlier = refit, refined
+    if not _starts_along(best, x[inlier], y[inlier]):
+        return None  # its inliers start elsewhere than its three points: the curve runs across the lane there
     return _oriented(best, x[inlier], y[inlier], spec)
+
+
+def _runs_along(curves: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Whether each curve (H, 4) runs within MAX_START_ANGLE_DEG of the car's heading (+x) at its point (x[i], y[i]):
+    the curve's normal there, the gradient of a·(x²+y²) + b·x + c·y + d, is then mostly lateral."""
+    gx = 2.0 * curves[:, 0] * x + curves[:, 1]
+    gy = 2.0 * curves[:, 0] * y + curves[:, 2]
+    return np.abs(gy) >= math.cos(math.radians(MAX_START_ANGLE_DEG)) * np.hypot(gx, gy)
+
+
+def _starts_along(curve: np.ndarray, x: np.ndarray, y: np.ndarray) -> bool:
+    """Whether the curve (4,) runs along the car where its points (x, y) start: at the one nearest ahead."""
+    i = int(np.argmin(x))
+    return bool(_runs_along(curve[None, :], x[i : i + 1], y[i : i + 1])[0])
 
 
 def _oriented(v: np.ndarray, x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec) -> GroundBoundary:
