@@ -34,7 +34,8 @@ def _scene(
 
 def _gains(bgr: np.ndarray, paint: np.ndarray, road: np.ndarray, verify: bool = True) -> np.ndarray | None:
     hls = cv2.cvtColor(bgr, cv2.COLOR_BGR2HLS)
-    return pl.paint_gains(bgr, paint, road, hls[..., 2] <= WHITE_SAT_MAX, _looks_yellow if verify else None)
+    light = pl.measure_light(bgr, paint, road, hls[..., 2] <= WHITE_SAT_MAX, _looks_yellow if verify else None)
+    return None if light is None else light.gains
 
 
 lights = st.tuples(*[st.floats(0.65, 1.35)] * 3)

@@ -76,15 +76,6 @@ class Light(NamedTuple):
     white_b_min: float | None  # the split between the paints in b (a ridge bluer than this is on the white tape's side)
 
 
-def paint_gains(
-    bgr: np.ndarray, paint: np.ndarray, on_road: np.ndarray, looks_white: np.ndarray,
-    looks_yellow: Callable[[np.ndarray], np.ndarray] | None = None,
-) -> np.ndarray | None:
-    """measure_light's gains (None: this frame cannot tell)."""
-    light = measure_light(bgr, paint, on_road, looks_white, looks_yellow)
-    return None if light is None else light.gains
-
-
 def blue_chroma(bgr: np.ndarray) -> np.ndarray:
     """b = log(B / √(G·R)) of every pixel (float32)."""
     px = bgr.astype(np.float32) + 1.0
