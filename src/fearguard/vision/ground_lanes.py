@@ -239,7 +239,8 @@ def marking_masks(
             if split_b is not None:
                 # white as the light was measured: a ridge on the white tape's side of the split between the paints
                 # (the next tile's tape, under that tile's own tint, stays too saturated for the plain test)
-                white_b |= (blue_chroma(bgr[band]) > split_b) & ~yellow_b
+                tape_side = ridged & ~yellow_b  # only ridges can be tape: the chroma of those alone
+                white_b[tape_side] |= blue_chroma(bgr[band][tape_side]) > split_b
         else:
             split_b = None
     white[band] = (ridged & white_b) * np.uint8(255)
@@ -395,7 +396,7 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
     if refit is not None and 2.0 * abs(refit[0]) <= MAX_CURVATURE:
         refined = np.abs(_distance(refit, x, y)) <= INLIER_M
         if refined @ weight >= REFIT_KEEP * (inlier @ weight) and _starts_along(refit, x[refined], y[refined]):
-            best, inlier = refit, refined
+            return _oriented(refit, x[refined], y[refined], spec)
     if not _starts_along(best, x[inlier], y[inlier]):
         return None  # its inliers start elsewhere than its three points: the curve runs across the lane there
     return _oriented(best, x[inlier], y[inlier], spec)

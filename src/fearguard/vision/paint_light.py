@@ -76,9 +76,9 @@ class Light(NamedTuple):
     white_b_min: float | None  # the split between the paints in b (a ridge bluer than this is on the white tape's side)
 
 
-def blue_chroma(bgr: np.ndarray) -> np.ndarray:
-    """b = log(B / √(G·R)) of every pixel (float32)."""
-    px = bgr.astype(np.float32) + 1.0
+def blue_chroma(bgr: np.ndarray, dtype: type = np.float32) -> np.ndarray:
+    """b = log(B / √(G·R)) of every pixel (channels + 1: black has a chroma), BGR (..., 3) → (...)."""
+    px = bgr.astype(dtype) + 1.0
     return np.log(px[..., 0] / np.sqrt(px[..., 1] * px[..., 2]))
 
 
@@ -96,7 +96,7 @@ def measure_light(
     px = bgr[paint].astype(np.float64) + 1.0
     if len(px) < MIN_PIXELS:
         return None
-    b = np.log(px[:, 0] / np.sqrt(px[:, 1] * px[:, 2]))
+    b = blue_chroma(bgr[paint], np.float64)
     threshold, split, share = _otsu(b)
     clear = split >= SPLIT_MIN
     if (not clear and looks_yellow is None) or not SHARE_RANGE[0] <= share <= SHARE_RANGE[1]:
