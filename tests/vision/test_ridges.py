@@ -84,3 +84,25 @@ def test_the_row_limited_top_hat_equals_the_full_one_on_its_rows(h: int, w: int,
         full, part = _ridges(channel, region), _ridges(channel, region, rows)
         assert np.array_equal(part[rows], full[rows])
         assert not np.delete(part, rows, axis=0).any()
+
+
+@settings(max_examples=100, deadline=None)
+@given(arrays(bool, st.tuples(st.integers(1, 12), st.integers(1, 40))), st.integers(0, 2**32 - 1))
+def test_the_run_through_a_marking_pixel_is_its_whole_run_of_the_row(feat: np.ndarray, seed: int) -> None:
+    """``runs`` (a binary search in the row-offset gap counts built from the integral image) gives the first and last
+    column of the consecutive marking pixels through each marking pixel, as a walk along the row does."""
+    h, w = feat.shape
+    maps = ridges.ridge_maps((np.zeros((h, w), np.uint8),), feat.astype(np.uint8) * 255, 0, h - 1)
+    r, u = np.nonzero(feat)
+    if len(r) == 0:
+        return
+    pick = np.random.default_rng(seed).permutation(len(r))
+    r, u = r[pick], u[pick]
+    start, end = maps.runs(r, u)
+    for ri, ui, a, b in zip(r, u, start, end, strict=True):
+        lo, hi = ui, ui
+        while lo > 0 and feat[ri, lo - 1]:
+            lo -= 1
+        while hi < w - 1 and feat[ri, hi + 1]:
+            hi += 1
+        assert (a, b) == (lo, hi)

@@ -189,7 +189,7 @@ def marking_features(
     bright = cv2.bitwise_and(cv2.compare(ridge_l, cv2.LUT(background, _BRIGHT_MIN), cv2.CMP_GE), mask)
     yellow = cv2.inRange(hls, (YELLOW_HUE[0], 0, YELLOW_SAT_MIN), (YELLOW_HUE[1], 255, 255))
     yellow &= cv2.compare(light, YELLOW_LIGHT_MIN, cv2.CMP_GE) & mask
-    rows = np.flatnonzero(cv2.reduce(yellow, 1, cv2.REDUCE_MAX))  # the saturation ridge matters only on these rows
+    rows = np.flatnonzero(cv2.reduce(yellow, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S))  # the saturation ridge matters only on these rows
     if len(rows):
         yellow &= cv2.compare(_ridges(hls[:, :, 2], region, rows), RIDGE_MIN, cv2.CMP_GE)
     return bright | yellow

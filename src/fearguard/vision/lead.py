@@ -66,7 +66,9 @@ def detect_lead(
     band = cv2.bitwise_and(cv2.inRange(gray[top : bottom + 1], 0, int(DARK_RATIO * reference)), lane)
     if cv2.countNonZero(band) == 0:
         return None  # nothing dark in the lane: the common case, and the cheap one
-    _n, _labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8)
+    # 16-bit labels cost about half of 32-bit ones; an 8-connected h×w mask holds at most ⌈h/2⌉·⌈w/2⌉ components
+    ltype = cv2.CV_16U if (band.shape[0] + 1) * (band.shape[1] + 1) // 4 < 65535 else cv2.CV_32S
+    _n, _labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8, ltype=ltype)
     stats = stats[1:].astype(np.int64)
     stats[:, 1] += top
     # the shape tests, vectorised over all blobs (a noisy night frame has thousands of dark specks)

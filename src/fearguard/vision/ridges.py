@@ -91,13 +91,23 @@ def ridge_maps(channels: tuple[np.ndarray, ...], features: np.ndarray, top_v_px:
     cv2.integral(feat.view(np.uint8), sum=integrals[0], sdepth=cv2.CV_64F)  # written in place: no copies
     for i, c in enumerate(channels):
         cv2.integral2(c[band], sum=integrals[1 + 2 * i], sqsum=integrals[2 + 2 * i], sdepth=cv2.CV_64F, sqdepth=cv2.CV_64F)
-    gaps = np.zeros((h, w + 1), np.int32)  # int32: rows · (width + 1) is far below 2³¹
-    np.cumsum(~feat, axis=1, out=gaps[:, 1:])  # non-marking pixels in [0, u) of each row
-    gaps += (np.arange(h, dtype=np.int32) * (w + 1))[:, None]
+    # non-marking pixels in [0, u) of each row, u minus the row's marking pixels there (from the integral: exact in
+    # float64), + r · (width + 1); int32: rows · (width + 1) is far below 2³¹
+    gaps = np.subtract(integrals[0, :-1], integrals[0, 1:])
+    gaps += _row_keys(h, w)
+    gaps = gaps.astype(np.int32)
     pad = 2 * _search_px(w) + 1
     padded = np.zeros((h, w + 2 * pad), bool)
     padded[:, pad : pad + w] = feat
     return RidgeMaps(top_v_px, feat, integrals, gaps.ravel(), pad, padded.ravel())
+
+
+@lru_cache(maxsize=8)
+def _row_keys(rows: int, width_px: int) -> np.ndarray:
+    """u + r · (width + 1) for r < rows, u ≤ width (float64, read-only): the same every frame, so built once."""
+    keys = np.arange(rows * (width_px + 1), dtype=np.float64).reshape(rows, width_px + 1)
+    keys.flags.writeable = False
+    return keys
 
 
 def _search_px(width_px: int) -> int:
