@@ -61,7 +61,7 @@ def detect_lead(
     # only the road rows (the lane polygon lies in them; the rows above cannot hold an underside), row 0 = top
     lane = np.zeros((bottom + 1 - top, w), np.uint8)
     band_rows = rows - top
-    poly = np.concatenate([np.stack([lu - LANE_WIDEN * width, band_rows], 1), np.stack([ru + LANE_WIDEN * width, band_rows], 1)[::-1]])
+    poly = np.concatenate([np.array([lu - LANE_WIDEN * width, band_rows]).T, np.array([ru + LANE_WIDEN * width, band_rows]).T[::-1]])
     cv2.fillPoly(lane, [np.rint(poly).astype(np.int32)], 255)
     band = cv2.bitwise_and(cv2.inRange(gray[top : bottom + 1], 0, int(DARK_RATIO * reference)), lane)
     if cv2.countNonZero(band) == 0:

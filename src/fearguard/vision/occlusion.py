@@ -147,7 +147,7 @@ def road_appearance(
         r, c = np.nonzero(interior[1 :: 2 * ROW_STEP, ::2])
         if len(r):
             r, c = 1 + 2 * ROW_STEP * r, 2 * c
-            grey, sat, rough = median(np.stack([maps.grey[r, c], maps.saturation[r, c], maps.roughness[r, c]]), axis=1)
+            grey, sat, rough = median(np.array([maps.grey[r, c], maps.saturation[r, c], maps.roughness[r, c]]), axis=1)
             return RoadAppearance(float(grey), float(sat), float(rough))
     rows = np.arange(region.top_v_px + 1, region.bottom_v_px, 2 * ROW_STEP)
     a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
@@ -155,7 +155,7 @@ def road_appearance(
     frac = _INTERIOR_FRACTIONS
     cols = clamp(np.rint(lo[:, None] + frac[None, :] * (hi - lo)[:, None]).astype(np.int64), 0, region.width_px - 1)
     r = (rows - maps.top_v_px)[:, None]
-    grey, sat, rough = median(np.stack([maps.grey[r, cols], maps.saturation[r, cols], maps.roughness[r, cols]]).reshape(3, -1), axis=1)
+    grey, sat, rough = median(np.array([maps.grey[r, cols], maps.saturation[r, cols], maps.roughness[r, cols]]).reshape(3, -1), axis=1)
     return RoadAppearance(float(grey), float(sat), float(rough))
 
 
