@@ -128,10 +128,26 @@ def test_zxing_photos_cheap_path_decodes_at_least_the_baseline(zxing_counts, fol
     assert c["cheap"] >= c["baseline"], c
 
 
+# (baseline, cheap, thorough) per folder, as docs/qr.md reports them for each OpenCV release measured: both the plain
+# detector and the decoder fearguard calls change between releases
+ZXING_COUNTS_BY_OPENCV = {
+    "5.0": {"zxing-qrcode-1": (12, 17, 18), "zxing-qrcode-3": (36, 39, 41), "zxing-qrcode-5": (14, 14, 19)},
+    "5.1": {"zxing-qrcode-1": (11, 17, 18), "zxing-qrcode-3": (36, 39, 40), "zxing-qrcode-5": (14, 14, 19)},
+}
+UNMEASURED_RELEASE_SLACK = 2  # [photos] on a release not in the table: each count within 2 of the newest release's
+
+
 def test_zxing_counts_as_measured(zxing_counts) -> None:
     """The numbers docs/qr.md reports (baseline, cheap, thorough); a change here must update the docs."""
     got = {f: (c["baseline"], c["cheap"], c["thorough"]) for f, c in zxing_counts.items()}
-    assert got == {"zxing-qrcode-1": (12, 17, 18), "zxing-qrcode-3": (36, 39, 41), "zxing-qrcode-5": (14, 14, 19)}
+    release = ".".join(cv2.__version__.split(".")[:2])
+    if release in ZXING_COUNTS_BY_OPENCV:
+        assert got == ZXING_COUNTS_BY_OPENCV[release]
+        return
+    newest = ZXING_COUNTS_BY_OPENCV[max(ZXING_COUNTS_BY_OPENCV, key=lambda r: tuple(map(int, r.split("."))))]
+    for folder, counts in newest.items():
+        near = all(abs(g - w) <= UNMEASURED_RELEASE_SLACK for g, w in zip(got[folder], counts, strict=True))
+        assert near, (cv2.__version__, folder, got[folder])
 
 
 def test_expected_text_strips_trailing_newline_and_crlf(tmp_path: Path) -> None:
@@ -150,10 +166,11 @@ def test_thorough_decodes_every_sharp_board_from_60px_tilted_up_to_40deg(roads) 
     assert grid_failures(roads, (60,), TILTS_DEG, ROLLS_DEG, 0.0, thorough=True) == []
 
 
-def test_thorough_decodes_slightly_soft_boards_from_70px_and_all_but_one_at_60px(roads) -> None:
-    """Gaussian blur sigma 0.5 px (a slightly soft lens): 18/18 at 70 px; at 60 px only pitch −30° rolled 90° fails."""
+def test_thorough_decodes_slightly_soft_boards_from_70px_and_all_but_at_most_one_at_60px(roads) -> None:
+    """Gaussian blur sigma 0.5 px (a slightly soft lens): 18/18 at 70 px; at 60 px at most pitch −30° rolled 90° fails
+    (it does with OpenCV 5.0, not with 5.1)."""
     assert grid_failures(roads, (70,), TILTS_DEG, ROLLS_DEG, 0.5, thorough=True) == []
-    assert grid_failures(roads, (60,), TILTS_DEG, ROLLS_DEG, 0.5, thorough=True) == [(60, 0, -30, 90)]
+    assert set(grid_failures(roads, (60,), TILTS_DEG, ROLLS_DEG, 0.5, thorough=True)) <= {(60, 0, -30, 90)}
 
 
 def test_thorough_decodes_every_blurred_board_from_100px(roads) -> None:
