@@ -204,7 +204,7 @@ def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
     if camera is not None:
         bgr = cam.undistort(bgr)
     ww, wh = work_size(fw, fh)
-    work = bgr if (ww, wh) == (fw, fh) else cv2.resize(bgr, (ww, wh), interpolation=cv2.INTER_AREA)
+    work = reduce_to(bgr, ww, wh)
     region, mask = _region_and_mask(ww, wh, camera)
     gray, hls = _band_conversions(work, region)
     band = slice(region.top_v_px, region.bottom_v_px + 1)  # the mask is empty outside the road rows
@@ -347,6 +347,20 @@ def _region_and_mask(width_px: int, height_px: int, camera: CameraModel | None) 
     mask = region_mask(region)
     mask.flags.writeable = False
     return region, mask
+
+
+def reduce_to(image: np.ndarray, width_px: int, height_px: int) -> np.ndarray:
+    """``image`` area-averaged to width × height: halved while the rest of the reduction stays a whole factor, then
+    INTER_AREA for what is left. OpenCV's 2× area reduction is vectorised and its 4× is not (720p BGR to the working
+    size: ~0.25 ms against ~0.9 ms); the result is within one grey level of a direct INTER_AREA, a quarter level
+    brighter on average (each halving rounds half up)."""
+    h, w = image.shape[:2]
+    if (w, h) == (width_px, height_px):
+        return image
+    while w % (2 * width_px) == 0 and h % (2 * height_px) == 0:
+        w, h = w // 2, h // 2
+        image = cv2.resize(image, (w, h), interpolation=cv2.INTER_AREA)
+    return image if (w, h) == (width_px, height_px) else cv2.resize(image, (width_px, height_px), interpolation=cv2.INTER_AREA)
 
 
 def _as_bgr(frame: np.ndarray) -> np.ndarray:
