@@ -1,6 +1,7 @@
 """Replay speed on 1280×720 video, one core: frames/s against plain decoding of the same file, in the same run.
 
     python benchmarks/bench_replay.py
+    python benchmarks/bench_replay.py --against /work/base/src   # the user's figure of this tree and another, interleaved
 
 Two figures per round, everything pinned to one core (``sched_setaffinity``):
 
@@ -9,12 +10,17 @@ Two figures per round, everything pinned to one core (``sched_setaffinity``):
 - what a user waits for: ``fearguard replay project_video.mp4 --out DIR`` as a fresh process over the whole
   video, wall time including start-up (imports) and the plots at the end, against decoding the whole file.
 
+``--against SRC``: the user's figure for this tree and for the tree at SRC, alternating round by round, each against its
+own decoding of the whole file just before (the machines here swing by ±15 % within a minute): medians and every round.
+
 Goal (issue 15): the user's figure at least half the decode-only frame rate.
 """
 
 from __future__ import annotations
 
+import argparse
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -56,18 +62,41 @@ def decode_all_fps() -> tuple[float, int]:
     return n / (time.perf_counter() - start), n
 
 
-def cli_fps(frames: int) -> float:
-    """Frames/s of ``fearguard replay VIDEO --out DIR`` as a user runs it: a fresh process, start-up and plots included."""
+def cli_fps(frames: int, src: Path | None = None) -> float:
+    """Frames/s of ``fearguard replay VIDEO --out DIR`` as a user runs it: a fresh process, start-up and plots included
+    (``src``: the fearguard package of another tree, ahead of the installed one)."""
+    env = dict(os.environ, PYTHONPATH=str(src)) if src is not None else None
     with tempfile.TemporaryDirectory() as out:
         start = time.perf_counter()
         subprocess.run([sys.executable, "-m", "fearguard.cli", "replay", str(VIDEO), "--out", out], check=True,
-                       capture_output=True, preexec_fn=lambda: os.sched_setaffinity(0, {0}))
+                       capture_output=True, env=env, preexec_fn=lambda: os.sched_setaffinity(0, {0}))
         return frames / (time.perf_counter() - start)
 
 
+def compare(against: Path, rounds: int) -> None:
+    """The user's ratio (replay / decoding) of this tree and of ``against``, interleaved round by round."""
+    here = Path(__file__).resolve().parents[1] / "src"
+    ratios: dict[str, list[float]] = {"new": [], "old": []}
+    for k in range(rounds):
+        for name, src in (("new", here), ("old", against)):
+            d_all, n = decode_all_fps()
+            ratios[name].append(cli_fps(n, src) / d_all)
+        print(f"round {k + 1}: ratio new {ratios['new'][-1]:.3f}, old ({against}) {ratios['old'][-1]:.3f}", flush=True)
+    for name, values in ratios.items():
+        print(f"{name}: median ratio {statistics.median(values):.3f} over {rounds} rounds "
+              f"({', '.join(f'{v:.3f}' for v in values)})")
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--against", type=Path, help="src folder of another fearguard tree to compare with")
+    parser.add_argument("--rounds", type=int, default=5, help="interleaved rounds of --against (default 5, ~3 min)")
+    args = parser.parse_args()
     os.sched_setaffinity(0, {0})  # one core, for this process and the decoding
     cv2.setNumThreads(1)
+    if args.against is not None:
+        compare(args.against, args.rounds)
+        return
     for k in range(ROUNDS):
         d, r = decode_fps(), replay_fps()
         print(f"round {k + 1}: engine: replay {r:.0f} frames/s (1280×720, decoding included), plain decoding {d:.0f} frames/s, "
