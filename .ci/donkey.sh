@@ -21,4 +21,7 @@ PY
 # the Donkey loop, then a subset of the project's own tests against the installed wheel
 "$env/bin/python" -m pytest -p no:cacheprovider -o addopts="" -q -s tests/integrations/test_donkey_loop.py
 "$env/bin/python" -m pytest -p no:cacheprovider -o addopts="" -q tests -k "test_api or test_engine or test_supervisor or donkey_part"
+# donkeycar's OpenCV is 4.x (the main environment has 5.x): the overlay's text boxes hold on both (issue 15)
+"$env/bin/python" -c "import cv2; print('overlay tests on OpenCV', cv2.__version__)"
+"$env/bin/python" -m pytest -p no:cacheprovider -o addopts="" -q tests/test_overlay.py
 echo "donkey.sh: $((SECONDS - start)) s"

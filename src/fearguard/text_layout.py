@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -25,6 +26,7 @@ MIN_FONT_SCALE = 0.3  # [-] smallest Hershey scale that stays legible (cap heigh
 PANEL_ALPHA = 0.6  # [-] opacity of the dark panel behind text
 ELLIPSIS = ".."
 SEPARATOR = " | "  # between phrases on one line (Hershey fonts draw ASCII only)
+INK_PROBE = "|Hgjpqy()[]{}$@"  # the tallest and deepest glyphs an overlay line can hold
 
 
 @dataclass(frozen=True)
@@ -72,13 +74,32 @@ class TextStyle:
         return cls(scale, thickness, max(1, round(scale * 4)))
 
     def size(self, text: str) -> tuple[int, int, int]:
-        """(width, height above baseline, depth below baseline) of a line, measured at the drawing thickness."""
+        """(width, height above baseline, depth below baseline) of a line, measured at the drawing thickness; the
+        height and depth are at least the ink of the tallest and deepest glyphs (``_ink_extent``)."""
         (w, h), base = cv2.getTextSize(text, FONT, self.scale, self.thickness_px)
-        return w, h, base
+        above, below = _ink_extent(self.scale, self.thickness_px)
+        return w, max(h, above), max(base, below)
 
     def line_height_px(self) -> int:
         _, h, base = self.size("Hg")
         return h + base + 2 * self.pad_px
+
+
+@lru_cache(maxsize=64)
+def _ink_extent(scale: float, thickness_px: int) -> tuple[int, int]:
+    """Rows of ink above and below the baseline when INK_PROBE is drawn (anti-aliased) at this scale and stroke.
+
+    ``cv2.getTextSize`` reports the cap height, and OpenCV 4.x draws ``|`` and brackets a few pixels above it (5.x
+    measures them): measuring the drawn ink holds the boxes to what is painted on every release.
+    """
+    (w, h), base = cv2.getTextSize(INK_PROBE, FONT, scale, thickness_px)
+    margin = 2 * (h + base + thickness_px) + 4
+    canvas = np.zeros((2 * margin, w + 2 * margin), np.uint8)
+    cv2.putText(canvas, INK_PROBE, (margin, margin), FONT, scale, 255, thickness_px, cv2.LINE_AA)
+    rows = np.flatnonzero(canvas.max(axis=1))
+    if rows.size == 0:
+        return h, base
+    return margin - int(rows[0]), int(rows[-1]) - margin + 1
 
 
 def fit_lines(text: str, style: TextStyle, max_width_px: int) -> list[str]:
