@@ -38,7 +38,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -47,6 +47,9 @@ from fearguard.report import LEVEL_ORDER, MODE_ORDER, JsonlLog, command_record, 
 from fearguard.supervisor import Command
 from fearguard.timeline import Trace, plot_timeline
 from fearguard.video import VideoSink, open_video
+
+if TYPE_CHECKING:
+    from fearguard.fuzzy.rulebase import RuleBase
 
 LOG_NAME = "log.jsonl"
 SUMMARY_NAME = "summary.json"
@@ -277,11 +280,12 @@ class Recorder:
             return None
         return write_json(self.out_dir / SUMMARY_NAME, summary)
 
-    def plot_timeline(self, title: str = "", with_speed: bool = False) -> Path | None:
-        """``out_dir/timeline.png`` from the trace (None when nothing is on disk or no frame was recorded)."""
+    def plot_timeline(self, title: str = "", with_speed: bool = False, rules: RuleBase | None = None) -> Path | None:
+        """``out_dir/timeline.png`` from the trace (None when nothing is on disk or no frame was recorded); ``rules``: the
+        supervisor's, whose thresholds the plot draws."""
         if self.out_dir is None or not self.trace.t_s:
             return None
-        return plot_timeline(self.trace, self.out_dir / "timeline.png", title=title, with_speed=with_speed)
+        return plot_timeline(self.trace, self.out_dir / "timeline.png", title=title, with_speed=with_speed, rules=rules)
 
 
 def write_json(path: str | Path, value: Mapping[str, Any] | Sequence[Any]) -> Path:

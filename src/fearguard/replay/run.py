@@ -121,7 +121,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     summary = json_value(summary)
     recorder.write_summary(summary)
     if options.plots and not stop:
-        recorder.plot_timeline(title=f"fearguard replay: {Path(source_path).name}")
+        recorder.plot_timeline(title=f"fearguard replay: {Path(source_path).name}", rules=guard.rules)
     if stop and not interrupted:  # every frame was replayed; the signal came while the files were written
         interrupted = True
         summary.update(interrupted=True, stopped_by=stop.name)

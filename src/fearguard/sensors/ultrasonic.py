@@ -176,7 +176,7 @@ class UltrasonicFilter:
     def reset(self) -> None:
         """Forget everything (track, readings, clock): the next call starts as at power-up.
 
-        The filter (and with it filterpy and scipy.stats, ~1 s on a Pi) is made here, when the FearGuard is
+        The filter (and with it filterpy and scipy.linalg, about a second on a Pi) is made here, when the FearGuard is
         built, on purpose: made on first use, that import stalled the first frame of a 20 Hz Donkey loop
         past the watchdog (EMERGENCY on 20 % of the easy drive)."""
         self._kf = kalman_filter(dim_x=2, dim_z=1)

@@ -14,10 +14,11 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fearguard.fuzzy.loader import load_rules
 from fearguard.interrupt import StopSignal
 from fearguard.recorder import SUMMARY_NAME, write_json
 from fearguard.report import JsonlLog, read_jsonl
@@ -26,6 +27,9 @@ from fearguard.sim.metrics import Row
 from fearguard.sim.road import Road
 from fearguard.sim.scenario import BUNDLED, Scenario, load_scenario
 from fearguard.timeline import plot_timeline
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 BENIGN = ("clear_straight", "s_curves")  # scenarios without a hazard: the false-alarm check
 
@@ -50,7 +54,8 @@ def run_to_folder(
         title = f"{scenario.name} ({controller}, seed {result.seed})"
         plots: list[Callable[[], object]] = [lambda: plot_trajectory(scenario, result.rows, out / "trajectory.png", title)]
         if controller == "guarded" and result.trace is not None:
-            plots.insert(0, lambda: plot_timeline(result.trace, out / "timeline.png", title=title, with_speed=True))
+            plots.insert(0, lambda: plot_timeline(result.trace, out / "timeline.png", title=title, with_speed=True,
+                                                    rules=load_rules(scenario.rules_path)))
         for draw in plots:
             if stop:
                 break
@@ -61,38 +66,68 @@ def run_to_folder(
     return result
 
 
-def plot_trajectory(scenario: Scenario, rows: Sequence[Row], path: Path, title: str) -> None:
-    """Top-down view: lane boundaries, the car's path coloured by mode, collisions and lane departures marked."""
-    import matplotlib
+MODE_COLOURS = {"NORMAL": "tab:green", "CAUTION": "tab:orange", "EMERGENCY": "tab:red", None: "tab:blue"}  # None: unsupervised
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+
+def plot_trajectory(scenario: Scenario, rows: Sequence[Row], path: Path, title: str) -> None:
+    """``trajectory_figure`` as a PNG at ``path``."""
+    trajectory_figure(scenario, rows, title).savefig(path, dpi=90, pil_kwargs={"compress_level": 1})  # a fast deflate
+
+
+def trajectory_figure(scenario: Scenario, rows: Sequence[Row], title: str) -> Figure:
+    """The run along the road: the car's offset from the lane centre over the distance driven, coloured by mode, with
+    the lane's edges, the static obstacles, the collision and the lane departures; on a road that bends, its top-down
+    map below. (Top-down alone, a 25 m road with a 0.4 m lane is a short stroke in an empty square.)"""
+    from matplotlib.figure import Figure
 
     road = Road(scenario.road)
-    s = np.linspace(0.0, road.length_m, 400)
     half = scenario.road.lane_width_m / 2
-    fig, ax = plt.subplots(figsize=(8, 8))
-    for lat in (-half, half):
-        x, y = road.point_at(s, lat)
-        ax.plot(x, y, color="grey", lw=1)
-    colours = {"NORMAL": "tab:green", "CAUTION": "tab:orange", "EMERGENCY": "tab:red", None: "tab:blue"}
-    ax.scatter([r.x_m for r in rows], [r.y_m for r in rows], s=4, c=[colours.get(r.mode, "tab:blue") for r in rows])
+    centre_s = np.linspace(0.0, road.length_m, 400)
+    cx, cy = road.point_at(centre_s, 0.0)
+    span = max(float(np.ptp(cx)), float(np.ptp(cy)), 1e-9)
+    bends = min(float(np.ptp(cx)), float(np.ptp(cy))) > 0.1 * span  # a straight road's map says nothing the strip does not
+    fig = Figure(figsize=(11, 9.5 if bends else 5))
+    along, *rest = fig.subplots(2 if bends else 1, 1, squeeze=False, height_ratios=(1, 1.5) if bends else (1,))[:, 0]
+    fig.subplots_adjust(left=0.08, right=0.8, top=0.92 if not bends else 0.95, bottom=0.1 if not bends else 0.06,
+                        hspace=0.25)
+    s = np.array([r.s_m for r in rows])
+    lat = np.array([r.lateral_m for r in rows])
+    along.axhspan(-half, half, color="0.94", lw=0)
+    for edge in (-half, half):
+        along.axhline(edge, color="grey", lw=1)
+    modes = [r.mode for r in rows]
+    for mode, colour in MODE_COLOURS.items():
+        mine = np.array([m == mode for m in modes])
+        if mine.any():
+            along.scatter(s[mine], lat[mine], s=5, color=colour, label=mode or "no supervisor", zorder=3)
+    out = np.array([not r.in_lane for r in rows])
+    if out.any():
+        along.scatter(s[out], lat[out], s=18, facecolors="none", edgecolors="m", label="outside the lane", zorder=4)
     hit = next((r for r in rows if r.collided), None)
     if hit is not None:
-        ax.plot(hit.x_m, hit.y_m, "kx", ms=12, mew=3)
-    out_of_lane = [(r.x_m, r.y_m) for r in rows if not r.in_lane]
-    if out_of_lane:
-        ax.scatter(*zip(*out_of_lane, strict=True), s=10, facecolors="none", edgecolors="m", label="outside the lane")
-    for ob in scenario.obstacles:
-        ox, oy = road.point_at(ob.s_m, ob.lateral_m)
-        ax.plot(ox, oy, "ks", ms=8)
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_title(title + "  (green NORMAL, orange CAUTION, red EMERGENCY, blue unsupervised)")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    fig.tight_layout()
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
+        along.plot(hit.s_m, hit.lateral_m, "kx", ms=12, mew=3, label="collision", zorder=5)
+    if scenario.obstacles:
+        along.plot([o.s_m for o in scenario.obstacles], [o.lateral_m for o in scenario.obstacles], "ks", ms=7, label="obstacle")
+    reach = max([2.5 * half, *(1.15 * abs(v) for v in lat), *(1.3 * abs(o.lateral_m) for o in scenario.obstacles)])
+    along.set(xlim=(0.0, road.length_m), ylim=(-reach, reach), xlabel="distance along the road (m)",
+              ylabel="offset from the lane centre (m, + left)")
+    along.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize="small", frameon=False)
+    if rest:
+        top = rest[0]
+        for edge in (-half, half):
+            top.plot(*road.point_at(centre_s, edge), color="grey", lw=1)
+        for mode, colour in MODE_COLOURS.items():
+            mine = [r for r in rows if r.mode == mode]
+            if mine:
+                top.scatter([r.x_m for r in mine], [r.y_m for r in mine], s=4, color=colour, zorder=3)
+        if hit is not None:
+            top.plot(hit.x_m, hit.y_m, "kx", ms=12, mew=3, zorder=5)
+        for ob in scenario.obstacles:
+            top.plot(*road.point_at(ob.s_m, ob.lateral_m), "ks", ms=7)
+        top.set_aspect("equal", adjustable="datalim")
+        top.set(xlabel="x (m)", ylabel="y (m)", title="top-down")
+    fig.suptitle(title)
+    return fig
 
 
 @dataclass(frozen=True)

@@ -181,7 +181,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     recorder.write_summary(summary)
     if o.plots and out is not None and recorder.frames:
         if stats.supervised_frames:
-            recorder.plot_timeline(title, with_speed=True)
+            recorder.plot_timeline(title, with_speed=True, rules=guard.rules if guard is not None else None)
         plot_drive(read_jsonl(out / "log.jsonl"), out / "drive.png", title)
     return DriveResult(summary, out, interrupted, recorder.video_path)
 

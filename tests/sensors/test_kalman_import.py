@@ -1,0 +1,60 @@
+"""fearguard.kalman: filterpy's filters without scipy.stats until a likelihood is asked for, and the real
+filterpy.stats for everyone else. Each check runs in a fresh interpreter (imports are process-wide)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+
+def _run(code: str) -> list[str]:
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout
+    return out.split()
+
+
+def test_a_fearguard_and_its_filters_do_not_import_scipy_stats():
+    probe = (
+        "import sys, numpy as np, fearguard as fg\n"
+        "g = fg.FearGuard(lambda f: 0.0)\n"
+        "g.step(fg.Observation(0.0, 1.0, np.zeros((120, 160, 3), np.uint8), ultrasonic_range_m=2.0))\n"
+        "print('filterpy.kalman' in sys.modules, 'scipy.stats' in sys.modules, 'filterpy.stats' in sys.modules)"
+    )
+    assert _run(probe) == ["True", "False", "False"]
+
+
+def test_the_likelihood_is_filterpys_own_once_asked_for():
+    probe = (
+        "import sys, numpy as np\n"
+        "from fearguard.kalman import kalman_filter, white_noise_q\n"
+        "kf = kalman_filter(dim_x=2, dim_z=1)\n"
+        "kf.x = np.array([[0.0], [1.0]]); kf.F = np.array([[1.0, 0.1], [0.0, 1.0]]); kf.H = np.array([[1.0, 0.0]])\n"
+        "kf.P *= 4.0; kf.R *= 0.5; kf.Q = white_noise_q(dim=2, dt=0.1, var=1.0)\n"
+        "kf.predict(); kf.update(np.array([[0.3]]))\n"
+        "ll = kf.log_likelihood\n"
+        "from scipy.stats import multivariate_normal\n"
+        "S = kf.S; y = kf.y\n"
+        "print(abs(ll - multivariate_normal.logpdf(y.ravel(), np.zeros(1), S)) < 1e-12, 'scipy.stats' in sys.modules)"
+    )
+    assert _run(probe) == ["True", "True"]
+
+
+def test_filterpy_stats_imported_after_is_the_real_module():
+    probe = (
+        "from fearguard.kalman import kalman_filter\n"
+        "kalman_filter(dim_x=2, dim_z=1)\n"
+        "import sys, filterpy, filterpy.stats\n"
+        "from filterpy.stats import gaussian\n"
+        "print(filterpy.stats.__file__.endswith('__init__.py'), filterpy.stats is sys.modules['filterpy.stats'],"
+        " round(float(gaussian(1.0, 2.0, 3.0)), 6))"
+    )
+    assert _run(probe) == ["True", "True", "0.19497"]  # N(1; mean 2, variance 3) = exp(-1/6) / sqrt(6π)
+
+
+def test_filterpy_already_imported_is_used_as_it_is():
+    probe = (
+        "import sys, filterpy.kalman\n"
+        "from fearguard.kalman import kalman_filter\n"
+        "kf = kalman_filter(dim_x=4, dim_z=2)\n"
+        "print(type(kf) is filterpy.kalman.KalmanFilter, kf.x.shape == (4, 1), 'scipy.stats' in sys.modules)"
+    )
+    assert _run(probe) == ["True", "True", "True"]
