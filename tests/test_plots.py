@@ -110,3 +110,11 @@ def test_the_trajectory_shows_the_lane_at_a_readable_scale(name: str):
     _legends_clear_and_inside(fig)
     labels = along.get_legend_handles_labels()[1]
     assert "NORMAL" in labels and ("obstacle" in labels) == bool(scenario.obstacles)
+
+
+@pytest.mark.parametrize("frames", [0, 1])
+def test_an_empty_or_one_frame_timeline_still_draws(frames: int):
+    fig = _drawn(timeline_figure(_trace([120.0] * frames, [Strategy.STOP] * frames), "short", rules=load_rules(None)))
+    low, high = fig.axes[5].get_xlim()
+    assert high > low
+    _legends_clear_and_inside(fig)

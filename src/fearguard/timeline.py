@@ -130,6 +130,4 @@ def _legend(ax: Axes, extra: Axes | None = None, x: float = 1.01) -> None:
     if extra is not None:
         more = extra.get_legend_handles_labels()
         handles, labels = handles + more[0], labels + more[1]
-    if handles:
-        ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(x, 1.0), borderaxespad=0.0, fontsize="small",
-                  frameon=False)
+    ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(x, 1.0), borderaxespad=0.0, fontsize="small", frameon=False)
