@@ -21,6 +21,7 @@ import numpy as np
 from fearguard.camera import CameraModel
 from fearguard.errors import EstimatorFault
 from fearguard.fuzzy.loader import load_rules
+from fearguard.fuzzy.rulebase import RuleBase
 from fearguard.interrupt import StopSignal
 from fearguard.observation import Observation
 from fearguard.recorder import Recorder, Trace
@@ -73,6 +74,7 @@ class RunResult:
     rows: tuple[Row, ...] = field(default=(), repr=False)  # per-frame truth and decisions (trajectory plot)
     trace: Trace | None = field(default=None, repr=False, compare=False)  # per-frame cues and decisions (timeline plot)
     video_path: Path | None = None
+    rules: RuleBase | None = field(default=None, repr=False, compare=False)  # the supervisor's (None: unsupervised), for the timeline
 
     @property
     def passed(self) -> bool:
@@ -165,7 +167,7 @@ def run_scenario(
     run = metrics.result()
     results = tuple(check_expectations(scenario.expectations, run, metrics.rows))
     return RunResult(scenario.name, controller, seed, run, results, frame_index, interrupted, stop.name if stop else None,
-                     tuple(metrics.rows), recorder.trace, recorder.video_path)
+                     tuple(metrics.rows), recorder.trace, recorder.video_path, guard.rules if baseline is None else None)
 
 
 def _unsupervised_steering(

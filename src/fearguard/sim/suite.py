@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fearguard.fuzzy.loader import load_rules
 from fearguard.interrupt import StopSignal
 from fearguard.recorder import SUMMARY_NAME, write_json
 from fearguard.report import JsonlLog, read_jsonl
@@ -54,8 +53,7 @@ def run_to_folder(
         title = f"{scenario.name} ({controller}, seed {result.seed})"
         plots: list[Callable[[], object]] = [lambda: plot_trajectory(scenario, result.rows, out / "trajectory.png", title)]
         if controller == "guarded" and result.trace is not None:
-            plots.insert(0, lambda: plot_timeline(result.trace, out / "timeline.png", title=title, with_speed=True,
-                                                    rules=load_rules(scenario.rules_path)))
+            plots.insert(0, lambda: plot_timeline(result.trace, out / "timeline.png", title=title, with_speed=True, rules=result.rules))
         for draw in plots:
             if stop:
                 break
@@ -82,14 +80,13 @@ def trajectory_figure(scenario: Scenario, rows: Sequence[Row], title: str) -> Fi
 
     road = Road(scenario.road)
     half = scenario.road.lane_width_m / 2
-    centre_s = np.linspace(0.0, road.length_m, 400)
-    cx, cy = road.point_at(centre_s, 0.0)
+    cx, cy = road.point_at(np.linspace(0.0, road.length_m, 400), 0.0)
     span = max(float(np.ptp(cx)), float(np.ptp(cy)), 1e-9)
     bends = min(float(np.ptp(cx)), float(np.ptp(cy))) > 0.1 * span  # a straight road's map says nothing the strip does not
-    fig = Figure(figsize=(11, 9.5 if bends else 5))
-    along, *rest = fig.subplots(2 if bends else 1, 1, squeeze=False, height_ratios=(1, 1.5) if bends else (1,))[:, 0]
-    fig.subplots_adjust(left=0.08, right=0.8, top=0.92 if not bends else 0.95, bottom=0.1 if not bends else 0.06,
-                        hspace=0.25)
+    height_in, heights, top, bottom = (9.5, (1, 1.5), 0.95, 0.06) if bends else (5, (1,), 0.92, 0.1)
+    fig = Figure(figsize=(11, height_in))
+    along, *rest = fig.subplots(len(heights), 1, squeeze=False, height_ratios=heights)[:, 0]
+    fig.subplots_adjust(left=0.08, right=0.8, top=top, bottom=bottom, hspace=0.25)
     s = np.array([r.s_m for r in rows])
     lat = np.array([r.lateral_m for r in rows])
     along.axhspan(-half, half, color="0.94", lw=0)
@@ -113,21 +110,27 @@ def trajectory_figure(scenario: Scenario, rows: Sequence[Row], title: str) -> Fi
               ylabel="offset from the lane centre (m, + left)")
     along.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize="small", frameon=False)
     if rest:
-        top = rest[0]
-        for edge in (-half, half):
-            top.plot(*road.point_at(centre_s, edge), color="grey", lw=1)
-        for mode, colour in MODE_COLOURS.items():
-            mine = [r for r in rows if r.mode == mode]
-            if mine:
-                top.scatter([r.x_m for r in mine], [r.y_m for r in mine], s=4, color=colour, zorder=3)
-        if hit is not None:
-            top.plot(hit.x_m, hit.y_m, "kx", ms=12, mew=3, zorder=5)
-        for ob in scenario.obstacles:
-            top.plot(*road.point_at(ob.s_m, ob.lateral_m), "ks", ms=7)
-        top.set_aspect("equal", adjustable="datalim")
-        top.set(xlabel="x (m)", ylabel="y (m)", title="top-down")
+        _draw_map(rest[0], scenario, road, rows, hit)
     fig.suptitle(title)
     return fig
+
+
+def _draw_map(ax: Any, scenario: Scenario, road: Road, rows: Sequence[Row], hit: Row | None) -> None:
+    """The top-down panel of ``trajectory_figure``: the lane's edges, the path coloured by mode, obstacles, collision."""
+    half = scenario.road.lane_width_m / 2
+    s = np.linspace(0.0, road.length_m, 400)
+    for edge in (-half, half):
+        ax.plot(*road.point_at(s, edge), color="grey", lw=1)
+    for mode, colour in MODE_COLOURS.items():
+        mine = [r for r in rows if r.mode == mode]
+        if mine:
+            ax.scatter([r.x_m for r in mine], [r.y_m for r in mine], s=4, color=colour, zorder=3)
+    if hit is not None:
+        ax.plot(hit.x_m, hit.y_m, "kx", ms=12, mew=3, zorder=5)
+    for ob in scenario.obstacles:
+        ax.plot(*road.point_at(ob.s_m, ob.lateral_m), "ks", ms=7)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set(xlabel="x (m)", ylabel="y (m)", title="top-down")
 
 
 @dataclass(frozen=True)
