@@ -49,3 +49,42 @@ def test_a_720p_dash_cam_frame_stays_within_a_grey_level_of_inter_area(shared_da
     d = reduce_to(frame, 320, 180).astype(int) - cv2.resize(frame, (320, 180), interpolation=cv2.INTER_AREA)
     assert np.abs(d).max() <= 1
     assert 0.0 <= d.mean() <= 0.5
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.data(), st.sampled_from([(1280, 720), (1920, 1080), (640, 480), (800, 600), (320, 240), (160, 120), (1000, 562)]),
+       st.integers(0, 240), st.integers(0, 240), st.sampled_from([1, 3]))
+def test_the_road_rows_alone_are_the_rows_of_the_whole_reduction(data, size: tuple[int, int], lo: int, hi: int,
+                                                                  channels: int) -> None:
+    """``reduce_rows``: the rows asked exactly as ``reduce_to`` gives them (a whole factor or not), every other row 0."""
+    from fearguard.vision.frame import reduce_rows
+    from fearguard.vision.lanes import work_size
+
+    fw, fh = size
+    ww, wh = work_size(fw, fh)
+    image = data.draw(hnp.arrays(np.uint8, (fh, fw) + ((channels,) if channels > 1 else ()), elements=st.integers(0, 255)))
+    rows = slice(min(lo, hi), max(lo, hi))
+    out = reduce_rows(image, ww, wh, rows)
+    whole = reduce_to(image, ww, wh)
+    assert out.shape == whole.shape and out.dtype == np.uint8
+    inside = np.zeros(wh, bool)
+    inside[rows] = True
+    assert np.array_equal(out[inside], whole[inside])
+    assert not out[~inside].any()
+
+
+def test_the_road_rows_of_noise_and_of_a_dash_cam_frame_match_the_whole_reduction(shared_data: Path) -> None:
+    """Every pixel different (seeded noise) and the replay's own frame: no row of the band is off by a pixel."""
+    from fearguard.vision.frame import reduce_rows
+
+    cap = cv2.VideoCapture(str(shared_data / "road" / "video" / "project_video.mp4"))
+    ok, frame = cap.read()
+    cap.release()
+    assert ok
+    rng = np.random.default_rng(0)
+    for image, (ww, wh), rows in [(frame, (320, 180), slice(111, 168)),
+                                  (rng.integers(0, 256, (1080, 1920, 3), np.uint8), (320, 180), slice(99, 171)),
+                                  (rng.integers(0, 256, (600, 800, 3), np.uint8), (320, 240), slice(140, 223))]:
+        out = reduce_rows(image, ww, wh, rows)
+        assert np.array_equal(out[rows], reduce_to(image, ww, wh)[rows])
+        assert not out[: rows.start].any() and not out[rows.stop :].any()
