@@ -1,10 +1,12 @@
-"""filterpy's Kalman filter and process noise, imported on first use and without scipy.stats.
+"""filterpy's Kalman filter and process noise, imported on first use and without scipy.stats or scipy.ndimage.
 
-``import filterpy.kalman`` imports ``filterpy.stats``, which imports scipy.stats (0.5–0.8 s here, several seconds on a
-Raspberry Pi) for one function the filters call: ``logpdf``, behind the ``likelihood`` properties fearguard never
-reads. fearguard's trackers get their filters here: filterpy is imported when the first filter is made, with
-``filterpy.stats`` standing in as a module whose ``logpdf`` imports the real one when first called. The stand-in is
-removed once filterpy is imported, so ``import filterpy.stats`` anywhere else gets the real module.
+``import filterpy.kalman`` imports the whole filterpy package. Two of its parts cost a start-up for nothing here:
+``filterpy.stats`` imports scipy.stats (0.5–0.8 s here, several seconds on a Raspberry Pi) for one function the
+filters call, ``logpdf``, behind the ``likelihood`` properties fearguard never reads; ``filterpy.discrete_bayes``
+imports scipy.ndimage (~0.1 s) and no filter uses it. fearguard's trackers get their filters here: filterpy is
+imported when the first filter is made, with those two standing in as modules (``logpdf`` imports the real one when
+first called). The stand-ins are removed once filterpy is imported, so ``import filterpy.stats`` or
+``filterpy.discrete_bayes`` anywhere else gets the real module.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ if TYPE_CHECKING:
     from filterpy.kalman import KalmanFilter
 
 _STATS = "filterpy.stats"
+_DEFERRED = (_STATS, "filterpy.discrete_bayes")  # imported by filterpy's __init__, used by no filter fearguard makes
 
 
 def _logpdf(*args: Any, **kwargs: Any) -> Any:
@@ -28,21 +31,24 @@ def _logpdf(*args: Any, **kwargs: Any) -> Any:
 
 
 def _import_filterpy() -> None:
-    """Import filterpy with ``filterpy.stats`` (and so scipy.stats) left for later, unless either is already loaded."""
-    if "filterpy" in sys.modules or _STATS in sys.modules or "scipy.stats" in sys.modules:
+    """Import filterpy with ``filterpy.stats`` and ``filterpy.discrete_bayes`` left for later, unless filterpy or
+    scipy.stats is already loaded (then nothing is saved)."""
+    if "filterpy" in sys.modules or "scipy.stats" in sys.modules:
         importlib.import_module("filterpy.kalman")
         return
-    stand_in = types.ModuleType(_STATS, "filterpy.stats, imported on first use (fearguard.kalman)")
-    stand_in.logpdf = _logpdf  # type: ignore[attr-defined]  # the one name filterpy's filters take from it
-    sys.modules[_STATS] = stand_in
+    stand_ins = {name: types.ModuleType(name, f"{name}, imported on first use (fearguard.kalman)") for name in _DEFERRED}
+    stand_ins[_STATS].logpdf = _logpdf  # type: ignore[attr-defined]  # the one name filterpy's filters take from it
+    sys.modules.update(stand_ins)
     try:
         importlib.import_module("filterpy.kalman")
     finally:
-        if sys.modules.get(_STATS) is stand_in:
-            del sys.modules[_STATS]
         package = sys.modules.get("filterpy")
-        if package is not None and getattr(package, "stats", None) is stand_in:
-            del package.stats  # ``filterpy.stats`` resolves to the real module when it is first imported
+        for name, stand_in in stand_ins.items():
+            if sys.modules.get(name) is stand_in:
+                del sys.modules[name]
+            attr = name.rpartition(".")[2]
+            if package is not None and getattr(package, attr, None) is stand_in:
+                delattr(package, attr)  # ``filterpy.<attr>`` resolves to the real module when it is first imported
 
 
 def kalman_filter(dim_x: int, dim_z: int) -> KalmanFilter:

@@ -1,4 +1,4 @@
-"""fearguard.kalman: filterpy's filters without scipy.stats until a likelihood is asked for, and the real
+"""fearguard.kalman: filterpy's filters without scipy.stats (or scipy.ndimage) until a likelihood is asked for, and the real
 filterpy.stats for everyone else. Each check runs in a fresh interpreter (imports are process-wide)."""
 
 from __future__ import annotations
@@ -12,14 +12,15 @@ def _run(code: str) -> list[str]:
     return out.split()
 
 
-def test_a_fearguard_and_its_filters_do_not_import_scipy_stats():
+def test_a_fearguard_and_its_filters_do_not_import_scipy_stats_or_ndimage():
     probe = (
         "import sys, numpy as np, fearguard as fg\n"
         "g = fg.FearGuard(lambda f: 0.0)\n"
         "g.step(fg.Observation(0.0, 1.0, np.zeros((120, 160, 3), np.uint8), ultrasonic_range_m=2.0))\n"
-        "print('filterpy.kalman' in sys.modules, 'scipy.stats' in sys.modules, 'filterpy.stats' in sys.modules)"
+        "print('filterpy.kalman' in sys.modules, 'scipy.stats' in sys.modules, 'filterpy.stats' in sys.modules,"
+        " 'scipy.ndimage' in sys.modules)"
     )
-    assert _run(probe) == ["True", "False", "False"]
+    assert _run(probe) == ["True", "False", "False", "False"]
 
 
 def test_the_likelihood_is_filterpys_own_once_asked_for():
@@ -58,3 +59,16 @@ def test_filterpy_already_imported_is_used_as_it_is():
         "print(type(kf) is filterpy.kalman.KalmanFilter, kf.x.shape == (4, 1), 'scipy.stats' in sys.modules)"
     )
     assert _run(probe) == ["True", "True", "True"]
+
+
+def test_discrete_bayes_waits_and_is_the_real_module_when_imported():
+    probe = (
+        "import sys\n"
+        "from fearguard.kalman import kalman_filter\n"
+        "kalman_filter(dim_x=2, dim_z=1)\n"
+        "before = 'scipy.ndimage' in sys.modules or 'filterpy.discrete_bayes' in sys.modules\n"
+        "import numpy as np, filterpy, filterpy.discrete_bayes as db\n"
+        "p = db.normalize(np.array([1.0, 3.0]))\n"
+        "print(before, db is sys.modules['filterpy.discrete_bayes'], hasattr(db, 'predict'), p.tolist() == [0.25, 0.75])"
+    )
+    assert _run(probe) == ["False", "True", "True", "True"]
