@@ -13,12 +13,17 @@ Two figures per round, everything pinned to one core (``sched_setaffinity``):
 ``--against SRC``: the user's figure for this tree and for the tree at SRC, alternating round by round, each against its
 own decoding of the whole file just before (the machines here swing by ±15 % within a minute): medians and every round.
 
+Each tree measured is byte-compiled first (``compileall``), as an installed package is: a user's runs read cached
+bytecode, while a machine with PYTHONDONTWRITEBYTECODE set (as these are) would otherwise recompile fearguard's
+modules on every start (~0.25 s of a 17 s replay).
+
 Goal (issue 15): the user's figure at least half the decode-only frame rate.
 """
 
 from __future__ import annotations
 
 import argparse
+import compileall
 import os
 import statistics
 import subprocess
@@ -73,9 +78,19 @@ def cli_fps(frames: int, src: Path | None = None) -> float:
         return frames / (time.perf_counter() - start)
 
 
+HERE = Path(__file__).resolve().parents[1] / "src"
+
+
+def byte_compile(src: Path) -> None:
+    """Cached bytecode for a tree's modules, as pip writes it for an installed package."""
+    compileall.compile_dir(src / "fearguard", quiet=1)
+
+
 def compare(against: Path, rounds: int) -> None:
     """The user's ratio (replay / decoding) of this tree and of ``against``, interleaved round by round."""
-    here = Path(__file__).resolve().parents[1] / "src"
+    here = HERE
+    for tree in (here, against):
+        byte_compile(tree)
     ratios: dict[str, list[float]] = {"new": [], "old": []}
     for k in range(rounds):
         for name, src in (("new", here), ("old", against)):
@@ -97,6 +112,7 @@ def main() -> None:
     if args.against is not None:
         compare(args.against, args.rounds)
         return
+    byte_compile(HERE)
     for k in range(ROUNDS):
         d, r = decode_fps(), replay_fps()
         print(f"round {k + 1}: engine: replay {r:.0f} frames/s (1280×720, decoding included), plain decoding {d:.0f} frames/s, "
