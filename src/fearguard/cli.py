@@ -451,6 +451,17 @@ def _version() -> str:
         return "(not installed: run from a source tree)"
 
 
+class _VersionAction(argparse.Action):
+    """``--version``: the version looked up only when asked (importlib.metadata costs ~50 ms of every start)."""
+
+    def __init__(self, option_strings: list[str], dest: str = argparse.SUPPRESS, **kwargs: Any) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, help="show the version and exit", **kwargs)
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: Any, **kwargs: Any) -> None:
+        print(f"fearguard {_version()}")  # on stdout, as argparse's own version action does
+        parser.exit()
+
+
 def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int, file: Any = None,
                       line: str | None = None) -> None:
     """warnings.showwarning for the command line: ``warning: message`` on stderr, no source line."""
@@ -459,7 +470,7 @@ def _one_line_warning(message: Warning | str, category: type[Warning], filename:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="fearguard", description="a fuzzy, affective safety supervisor around your steering function")
-    parser.add_argument("--version", action="version", version=f"fearguard {_version()}")
+    parser.add_argument("--version", action=_VersionAction)
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="a scripted drive through glare, occlusion, an obstacle and stale QR")
     demo.add_argument("--rules", default=None, help="rule file (default: the bundled model-car rules)")

@@ -1,5 +1,5 @@
-"""fearguard.kalman: filterpy's filters without scipy.stats (or scipy.ndimage) until a likelihood is asked for, and the real
-filterpy.stats for everyone else. Each check runs in a fresh interpreter (imports are process-wide)."""
+"""fearguard.kalman: filterpy's filters without scipy.stats (or scipy.ndimage, scipy.linalg) until a likelihood is asked
+for, and the real modules for everyone else. Each check runs in a fresh interpreter (imports are process-wide)."""
 
 from __future__ import annotations
 
@@ -12,15 +12,54 @@ def _run(code: str) -> list[str]:
     return out.split()
 
 
-def test_a_fearguard_and_its_filters_do_not_import_scipy_stats_or_ndimage():
+def test_a_fearguard_and_its_filters_do_not_import_scipy_stats_ndimage_or_linalg():
     probe = (
         "import sys, numpy as np, fearguard as fg\n"
         "g = fg.FearGuard(lambda f: 0.0)\n"
-        "g.step(fg.Observation(0.0, 1.0, np.zeros((120, 160, 3), np.uint8), ultrasonic_range_m=2.0))\n"
+        "for k in range(3):\n"
+        "    g.step(fg.Observation(0.1 * k, 1.0, np.full((120, 160, 3), k, np.uint8), ultrasonic_range_m=2.0 - 0.1 * k))\n"
         "print('filterpy.kalman' in sys.modules, 'scipy.stats' in sys.modules, 'filterpy.stats' in sys.modules,"
-        " 'scipy.ndimage' in sys.modules)"
+        " 'scipy.ndimage' in sys.modules, 'scipy.linalg' in sys.modules)"
     )
-    assert _run(probe) == ["True", "False", "False", "False"]
+    assert _run(probe) == ["True", "False", "False", "False", "False"]
+
+
+def test_process_noise_is_filterpys_block_matrix():
+    probe = (
+        "import numpy as np\n"
+        "from fearguard.kalman import white_noise_q\n"
+        "q = white_noise_q(dim=2, dt=0.05, var=0.7)\n"
+        "from filterpy.common import Q_discrete_white_noise\n"
+        "print(np.array_equal(q, Q_discrete_white_noise(dim=2, dt=0.05, var=0.7)))"
+    )
+    assert _run(probe) == ["True"]
+
+
+def test_scipy_linalg_imported_after_is_the_real_module_and_filterpy_calls_it():
+    probe = (
+        "import sys, numpy as np\n"
+        "from fearguard.kalman import kalman_filter\n"
+        "kalman_filter(dim_x=2, dim_z=1)\n"
+        "before = 'scipy.linalg' in sys.modules\n"
+        "from filterpy.kalman import MerweScaledSigmaPoints\n"
+        "sigmas = MerweScaledSigmaPoints(2, alpha=0.1, beta=2.0, kappa=1.0).sigma_points(np.zeros(2), np.diag([4.0, 1.0]))\n"
+        "import scipy, scipy.linalg\n"
+        "real = scipy.linalg is sys.modules['scipy.linalg'] and scipy.linalg.__file__.endswith('__init__.py')\n"
+        "print(before, real, issubclass(scipy.linalg.LinAlgError, Exception), sigmas.shape, round(float(sigmas[1, 0]), 6))"
+    )
+    # sigma point 1 = mean + the first column of cholesky((n + lambda) P), lambda = alpha² (n + kappa) - n = -1.97
+    assert _run(probe) == ["False", "True", "True", "(5,", "2)", str(round((0.03 * 4.0) ** 0.5, 6))]
+
+
+def test_scipy_linalg_already_imported_is_what_filterpy_gets():
+    probe = (
+        "import sys, scipy.linalg\n"
+        "from fearguard.kalman import kalman_filter\n"
+        "kalman_filter(dim_x=2, dim_z=1)\n"
+        "import filterpy.kalman.UKF as ukf\n"
+        "print(ukf.cholesky is scipy.linalg.cholesky, sys.modules['scipy.linalg'] is scipy.linalg)"
+    )
+    assert _run(probe) == ["True", "True"]
 
 
 def test_the_likelihood_is_filterpys_own_once_asked_for():

@@ -22,6 +22,7 @@ from fearguard.fuzzy.loader import load_rules
 from fearguard.interrupt import StopSignal
 from fearguard.observation import LeadBox, Observation
 from fearguard.recorder import CommandStats, Recorder
+from fearguard.replay.read_ahead import read_ahead, usable_cores
 from fearguard.replay.sensor_log import SensorLog, load_sensor_log
 from fearguard.replay.sources import SourceError, open_source, parse_position
 from fearguard.report import json_value
@@ -49,6 +50,7 @@ class ReplayOptions:
     plots: bool = True
     vehicle: VehicleLimits = field(default_factory=VehicleLimits)  # its range sensor and QR are what the recording has (below)
     steer: Callable[[Any], float] | None = None  # the wrapped steering function, frame -> degrees (None: HoughLaneSteering)
+    read_ahead: bool | None = None  # decode the next frames on another core (read_ahead.py); None: when there is one
 
 
 @dataclass(frozen=True)
@@ -83,6 +85,9 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     stop_at = parse_position(options.stop, source.fps) if options.stop else None
     expected = _expected(source.expected_frames, start, stop_at, options.every)
     frames = source.iter_frames(start, stop_at, options.every)
+    ahead = options.read_ahead if options.read_ahead is not None else usable_cores() > 1
+    if ahead:
+        frames = read_ahead(frames)
     interrupted, began = False, time.perf_counter()
     recorder = Recorder(out, fps=source.fps / options.every, video=options.video)
     try:
@@ -101,6 +106,8 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
                     break
     except KeyboardInterrupt:
         interrupted = True
+    finally:
+        frames.close()  # the reader stops (and the source is closed) before its skips and end are summarised
     interrupted = interrupted or bool(stop)
     elapsed = time.perf_counter() - began
     done = recorder.frames

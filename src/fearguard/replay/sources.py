@@ -18,7 +18,7 @@ import os
 import re
 import statistics
 from abc import ABC, abstractmethod
-from collections.abc import Iterator, Mapping
+from collections.abc import Generator, Iterator, Mapping
 from dataclasses import dataclass, field
 from itertools import pairwise
 from pathlib import Path
@@ -90,7 +90,7 @@ class FrameSource(ABC):
         self.stopped_early: str | None = None
         self.log_field_units: Mapping[str, str] = _EMPTY_RECORD  # units and sign of each field a Frame adds to the log
 
-    def iter_frames(self, start: int = 0, stop: int | None = None, every: int = 1) -> Iterator[Frame]:
+    def iter_frames(self, start: int = 0, stop: int | None = None, every: int = 1) -> Generator[Frame, None, None]:
         """Frames with start ≤ index < stop, every ``every``-th; resets ``skipped`` and ``stopped_early``."""
         if not (_is_int(start) and start >= 0):
             raise SourceError(self.path, "start", f"must be a frame index ≥ 0, got {start!r}")
@@ -103,7 +103,7 @@ class FrameSource(ABC):
         return self._frames(start, stop, every)
 
     @abstractmethod
-    def _frames(self, start: int, stop: int | None, every: int) -> Iterator[Frame]:
+    def _frames(self, start: int, stop: int | None, every: int) -> Generator[Frame, None, None]:
         """The kind-specific iteration; arguments are already checked."""
 
     def _skip(self, index: int | None, reason: str) -> None:
@@ -182,7 +182,7 @@ class VideoSource(FrameSource):
             return None
         return round(msec * self.file_fps / 1000.0)
 
-    def _frames(self, start: int, stop: int | None, every: int) -> Iterator[Frame]:
+    def _frames(self, start: int, stop: int | None, every: int) -> Generator[Frame, None, None]:
         cap = cv2.VideoCapture(str(self.path))
         try:
             next_index = 0  # index the next successful read should have
@@ -273,7 +273,7 @@ class ImageFolderSource(FrameSource):
                 break
         super().__init__(path, fps or DEFAULT_FPS, len(self.files), size, notes)
 
-    def _frames(self, start: int, stop: int | None, every: int) -> Iterator[Frame]:
+    def _frames(self, start: int, stop: int | None, every: int) -> Generator[Frame, None, None]:
         end = len(self.files) if stop is None else min(stop, len(self.files))
         for index in range(start, end, every):
             file = self.files[index]
@@ -359,7 +359,7 @@ class TubSource(FrameSource):
                     except ValueError as exc:
                         yield catalog.name, number, f"not valid JSON ({exc})"
 
-    def _frames(self, start: int, stop: int | None, every: int) -> Iterator[Frame]:
+    def _frames(self, start: int, stop: int | None, every: int) -> Generator[Frame, None, None]:
         position = 0
         for catalog, number, record in self._lines():
             index, position = position, position + 1  # Tub v2 record index = position over all catalog lines
