@@ -25,8 +25,8 @@ if TYPE_CHECKING:
     from filterpy.kalman import KalmanFilter
 
 _STATS = "filterpy.stats"
-_LINALG = "scipy.linalg"
-_DEFERRED = (_STATS, "filterpy.discrete_bayes", _LINALG)  # imported by filterpy's __init__, used by no filter fearguard makes
+_DEFERRED = (_STATS, "filterpy.discrete_bayes")  # imported by filterpy's __init__, used by no filter fearguard makes
+_LINALG = "scipy.linalg"  # imported by filterpy's other filters and filterpy.common, called by none fearguard makes
 
 
 def _logpdf(*args: Any, **kwargs: Any) -> Any:
@@ -55,7 +55,7 @@ def _import_filterpy() -> None:
     if "filterpy" in sys.modules or "scipy.stats" in sys.modules:
         importlib.import_module("filterpy.kalman")
         return
-    stand_ins = {name: types.ModuleType(name, f"{name}, imported on first use (fearguard.kalman)") for name in _DEFERRED[:2]}
+    stand_ins = {name: types.ModuleType(name, f"{name}, imported on first use (fearguard.kalman)") for name in _DEFERRED}
     stand_ins[_STATS].logpdf = _logpdf  # type: ignore[attr-defined]  # the one name filterpy's filters take from it
     if _LINALG not in sys.modules:
         stand_ins[_LINALG] = _LinalgStandIn(_LINALG, f"{_LINALG}, imported on first use (fearguard.kalman)")
