@@ -113,6 +113,9 @@ VEHICLES = (
     fg.VehicleLimits(has_ultrasonic=True, has_qr_localisation=True),
     fg.VehicleLimits(has_ultrasonic=True),
     fg.VehicleLimits(has_qr_localisation=True, max_speed_mps=1.0, max_steering_deg=20.0),
+    # a road car that declares no radar but is given ranges (issue 31: they must count)
+    fg.VehicleLimits(max_speed_mps=30.0, max_decel_mps2=6.0, reaction_time_s=0.5, stop_margin_m=1.0, ultrasonic_min_range_m=0.3,
+                     ultrasonic_max_range_m=80.0, lead_max_decel_mps2=8.0, max_closing_speed_mps=45.0),
 )
 CUE_RANGES = ((0.0, 1.0), (0.0, 255.0), (0.0, 1.0), (0.0, 5.0), (0.0, 40.0))
 
@@ -166,7 +169,8 @@ def _steering(r: random.Random, max_deg: float) -> tuple[Callable[[object], obje
         return (lambda frame: value), ""
     if roll < 0.87:
         value = garbage(r)
-        ok = reading(value) is not None and math.isfinite(reading(value) or math.nan) and abs(reading(value) or 0.0) <= max_deg
+        v = reading(value)  # a reading of exactly 0 is a fine angle (not falsy garbage)
+        ok = v is not None and math.isfinite(v) and abs(v) <= max_deg
         return (lambda frame: value), "" if ok else "steering garbage"
     if roll < 0.93:
         exc = r.choice([ValueError("bad"), ZeroDivisionError(), Unprintable(), MemoryError(), RecursionError()])
@@ -309,9 +313,29 @@ def judge(cmd: object, vehicle: fg.VehicleLimits, injected: Injected, tally: Tal
     if not faulted:
         values = cmd.cues.values()
         for i in injected.non_number_cues:
-            applies = (i != 3 or vehicle.has_ultrasonic) and (i != 4 or vehicle.has_qr_localisation)
+            applies = i != 4 or vehicle.has_qr_localisation  # a range is read on every car; QR only where it applies
             if applies and not math.isnan(values[i]):
                 tally.bad(tally.unsafe, f"non-number read as a number ({CUE_NAMES[i]})", repr(values[i]))
+
+
+    if not faulted:
+        _judge_envelope(cmd, vehicle, tally)
+
+
+def _judge_envelope(cmd: fg.Command, vehicle: fg.VehicleLimits, tally: Tally) -> None:
+    """Invariant 2 at the range the command used: v·t_r + v²/(2a) ≤ max(0, d − margin + v_f²/(2b)); a finite range
+    counts whatever the car declares."""
+    d = cmd.cues.obstacle_range_m
+    if not (isinstance(d, float) and 0.0 <= d < math.inf):
+        return
+    closing = cmd.closing_speed_mps
+    v, b = cmd.speed_limit_mps, vehicle.lead_max_decel_mps2
+    v_f = 0.0 if not math.isfinite(closing) else max(0.0, -closing)  # unknown speed of the object ahead: standing (the
+    # speed the supervisor credited it is at most its closing bound; the oracle credits only an opening gap)
+    need = v * vehicle.reaction_time_s + v * v / (2.0 * vehicle.max_decel_mps2)
+    room = max(0.0, d - vehicle.stop_margin_m + v_f * v_f / (2.0 * b))
+    if need > room + 1e-6 and v > 0.0 and not math.isfinite(closing):
+        tally.bad(tally.unsafe, "speed limit beyond the stopping envelope of a given range", f"d={d:.4g} m, limit {v:.4g} m/s")
 
 
 def run_observations(n: int, seed: int, tally: Tally) -> None:
@@ -354,6 +378,13 @@ def _deep(r: random.Random, json_like: bool) -> str:
     return "{a = " * depth + "1" + "}" * depth
 
 
+def _deep_keys(r: random.Random) -> str:
+    """TOML nested without a bracket: dotted keys, or a dotted table header (issue 31: a RecursionError once)."""
+    depth = r.choice([70, 1000, 3000])
+    path = ".".join(["a"] * depth)
+    return f"{path} = 1\n" if r.random() < 0.5 else f"[{path}]\nx = 1\n"
+
+
 def mutate(text: str, r: random.Random, json_like: bool) -> str:
     """One to three random edits of a text file."""
     for _ in range(r.randint(1, 3)):
@@ -374,6 +405,8 @@ def mutate(text: str, r: random.Random, json_like: bool) -> str:
         elif op == 5:
             value = _deep(r, json_like)
             lines.insert(i, (f'{{"x": {value}}}\n' if json_like else f"deep_{i} = {value}\n"))
+        elif op == 10 and not json_like and r.random() < 0.5:
+            lines.insert(i, _deep_keys(r))
         elif op == 6:
             cut = r.randrange(len(text) + 1)
             return text[:cut]
@@ -429,6 +462,27 @@ def _read_sensor_log(path: Path) -> str:
     return "loaded"
 
 
+def _read_vehicle(path: Path) -> str:
+    from fearguard.vehicle import load_vehicle
+
+    load_vehicle(path)
+    return "loaded"
+
+
+def _read_camera(path: Path) -> str:
+    from fearguard.camera import load_camera
+
+    load_camera(path)
+    return "loaded"
+
+
+def _read_counterexample(path: Path) -> str:
+    from fearguard.testing.history import load_case
+
+    load_case(path)
+    return "loaded"
+
+
 def _read_tub(folder: Path) -> str:
     source = open_source(folder)
     frames = list(source.iter_frames())
@@ -464,13 +518,42 @@ def _tub_texts() -> tuple[str, str]:
     return manifest + "\n", catalog + "\n"
 
 
+def _camera_seed() -> str:
+    """A camera.toml as ``fearguard calibrate`` writes it."""
+    from fearguard.camera import CameraModel, save_camera
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "camera.toml"
+        save_camera(CameraModel(width_px=1280, height_px=720, fx_px=1156.9, fy_px=1152.9, cx_px=665.9, cy_px=388.8,
+                                distortion=(-0.2376, -0.0854, -0.0008, -0.0001, 0.1058), mount_height_m=1.2, pitch_deg=1.5), path)
+        return path.read_text()
+
+
+def _counterexample_seed() -> str:
+    """A counterexample history as ``fearguard verify`` writes it."""
+    from fearguard.testing.history import Case, Step, save_case
+
+    steps = [Step(t_s=0.1 * k, speed_mps=1.0, cues=fg.Cues(1.0 - 0.2 * k, 120.0, 0.1 * k, 3.0 - k, 0.0), steer_output=float(k))
+             for k in range(3)]
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "cx.jsonl"
+        save_case(path, Case.drive(steps, note="seed"), {"invariant": "limits_in_range", "number": "1"})
+        return path.read_text()
+
+
 def file_kinds() -> list[FileKind]:
     scenarios = tuple((PACKAGE / "scenarios" / n).read_text() for n in ("clear_straight.toml", "slower_lead.toml", "night.toml"))
     rules = tuple((PACKAGE / "rules" / n).read_text() for n in ("default.toml", "road_car.toml"))
     csv, jsonl = _sensor_seeds()
     manifest, catalog = _tub_texts()
+    vehicles = ("preset = \"road_car\"\nmax_speed_mps = 25.0\n", "max_speed_mps = 1.5\nhas_ultrasonic = true\nstop_margin_m = 0.2\n")
+    cameras = (_camera_seed(),)
+    counterexample = _counterexample_seed()
     return [
         FileKind("rules", rules, ".toml", _read_rules),
+        FileKind("vehicle", vehicles, ".toml", _read_vehicle),
+        FileKind("camera", cameras, ".toml", _read_camera),
+        FileKind("counterexample", (counterexample,), ".jsonl", _read_counterexample, json_like=True),
         FileKind("scenario", scenarios, ".toml", _read_scenario),
         FileKind("sensor_csv", (csv,), ".csv", _read_sensor_log),
         FileKind("sensor_jsonl", (jsonl,), ".jsonl", _read_sensor_log, json_like=True),

@@ -212,7 +212,7 @@ def test_fault_before_any_frame_and_internal_errors_never_raise(rules) -> None:
 def test_nan_cue_is_worst_and_said_so(guard) -> None:
     cmd = guard.step(fg.Observation(t_s=0.0, cues=fg.Cues(0.9, 120.0, math.nan, math.inf, 0.5)))
     assert cmd.fear == pytest.approx(guard.rules.evaluate(fg.Cues(0.9, 120.0, 1.0, math.inf, 0.5)).fear)
-    assert "occlusion unknown: counted as its worst value" in cmd.reasons
+    assert "occlusion unknown (NaN): counted as its worst value" in cmd.reasons
 
 
 def test_without_a_frame_vision_is_unknown_and_ultrasonic_fills_the_range(guard) -> None:
@@ -229,9 +229,19 @@ def test_without_a_frame_vision_is_unknown_and_ultrasonic_fills_the_range(guard)
 def test_absent_sensors_are_neutral_not_worst(rules) -> None:
     car = fg.VehicleLimits(has_ultrasonic=False, has_qr_localisation=False)
     guard = fg.FearGuard(lambda f: 0.0, rules=rules, vehicle=car)
-    cmd = drive(guard, fg.Cues(0.9, 120.0, 0.0, math.nan, math.nan), 0.0, 5.0)[-1]
+    cmd = drive(guard, fg.Cues(0.9, 120.0, 0.0, math.inf, math.nan), 0.0, 5.0)[-1]
     assert cmd.cues.obstacle_range_m == math.inf and cmd.cues.qr_staleness_s == 0.0
     assert cmd.mode is fg.Mode.NORMAL and cmd.speed_limit_mps == pytest.approx(2.0)
+    assert not any("collision" in r for r in cmd.reasons)  # a hazard this car cannot sense is never the dominant cause
+
+
+def test_a_nan_range_is_unknown_even_on_a_car_without_a_range_sensor(rules) -> None:
+    """An absent sensor is declared in configuration (inf = nothing known), never signalled by NaN: NaN is a failed
+    reading, unknown = worst."""
+    guard = fg.FearGuard(lambda f: 0.0, rules=rules, vehicle=fg.VehicleLimits())
+    cmd = drive(guard, fg.Cues(0.9, 120.0, 0.0, math.nan, 0.0), 0.0, 1.0)[-1]
+    assert cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
+    assert "obstacle_range_m unknown (NaN): counted as its worst value" in cmd.reasons
 
 
 def test_unknown_speed_assumes_the_worst_for_imminence(guard) -> None:

@@ -430,6 +430,44 @@ def _count(minimum: int) -> Callable[[str], int]:
     return parse
 
 
+def _number(low: float | None = None, *, above: float | None = None, below: float | None = None) -> Callable[[str], float]:
+    """An argparse type: a finite number, at least ``low`` / more than ``above`` / less than ``below`` (exit 2, one line)."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"must be a finite number, got {text!r}")
+        if low is not None and value < low:
+            raise argparse.ArgumentTypeError(f"must be >= {low:g}, got {value:g}")
+        if above is not None and value <= above:
+            raise argparse.ArgumentTypeError(f"must be > {above:g}, got {value:g}")
+        if below is not None and value >= below:
+            raise argparse.ArgumentTypeError(f"must be < {below:g}, got {value:g}")
+        return value
+
+    return parse
+
+
+def _position(text: str) -> str:
+    """An argparse type for ``--from/--to``: seconds ('12.5s', '12.5') or a frame ('300f'); inside the recording is
+    checked once it is open."""
+    from fearguard.replay.sources import POSITION_FORMS, position_form_ok
+
+    if not position_form_ok(text):
+        raise argparse.ArgumentTypeError(f"{text!r}: {POSITION_FORMS}")
+    return text
+
+
+def _folder(text: str) -> str:
+    """An argparse type: an existing folder to read from."""
+    if not Path(text).is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is not an existing folder" + (" (it is a file)" if Path(text).exists() else ""))
+    return text
+
+
 def _out_folder(text: str) -> str:
     """An argparse type: a folder to write into; an existing file there (or above it) is a usage error, exit 2."""
     path = Path(text)
@@ -487,16 +525,20 @@ def build_parser() -> argparse.ArgumentParser:
     explain = rsub.add_parser("explain", help="fear, level, top rules and the command for given cues")
     explain.add_argument("--cues", required=True, help="e.g. lane_confidence=0.2,occlusion=0.8 (others calm)")
     explain.add_argument("--rules", default=None, help="rule file (default: bundled)")
-    explain.add_argument("--lead-bearing", type=float, default=None, help="a lead vehicle at this bearing (deg, + left)")
-    explain.add_argument("--lead-range", type=float, default=None, help="its range (m)")
-    explain.add_argument("--top", type=int, default=3, help="how many rules to show")
+    explain.add_argument("--lead-bearing", type=_number(above=-90.0, below=90.0), default=None,
+                         help="a lead vehicle at this bearing (deg, + left)")
+    explain.add_argument("--lead-range", type=_number(0.0), default=None, help="its range (m)")
+    explain.add_argument("--top", type=_count(1), default=3, help="how many rules to show")
     explain.set_defaults(func=cmd_explain)
     calibrate = sub.add_parser("calibrate", help="camera intrinsics and distortion from chessboard photos → camera.toml")
     calibrate.add_argument("images", nargs="*", help="chessboard photos, or folders of *.jpg/*.png")
     calibrate.add_argument("--pattern", default="9x6", help="inner corners COLSxROWS (default 9x6: a board of 10×7 squares)")
-    calibrate.add_argument("--square-m", type=float, default=1.0, help="side of one square in metres (does not change the intrinsics)")
-    calibrate.add_argument("--mount-height-m", type=float, default=None, help="camera height above the ground (m), for ground ranges")
-    calibrate.add_argument("--pitch-deg", type=float, default=0.0, help="camera pitch, positive = looking down (deg)")
+    calibrate.add_argument("--square-m", type=_number(above=0.0), default=1.0,
+                           help="side of one square in metres (does not change the intrinsics)")
+    calibrate.add_argument("--mount-height-m", type=_number(above=0.0), default=None,
+                           help="camera height above the ground (m), for ground ranges")
+    calibrate.add_argument("--pitch-deg", type=_number(above=-90.0, below=90.0), default=0.0,
+                           help="camera pitch, positive = looking down (deg)")
     calibrate.add_argument("--out", default=None, help="camera file to write (TOML), e.g. camera.toml "
                            "(default: camera.toml in a new folder fearguard-out/calibrate-...-TIMESTAMP)")
     calibrate.set_defaults(func=cmd_calibrate)
@@ -514,10 +556,10 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--rules", default=None, help="rule file (default: the bundled model-car rules)")
     rp.add_argument("--no-ultrasonic", action="store_true", help="the car has no ultrasonic (even if the log has a column)")
     rp.add_argument("--qr-localisation", action="store_true", help="the car localises with QR markers (scan frames, staleness cue)")
-    rp.add_argument("--speed-mps", type=float, default=None, help="the recording's speed when the log has none (default: unknown)")
-    rp.add_argument("--fps", type=float, default=None, help="frame rate of an image folder (or to override a video's)")
-    rp.add_argument("--from", dest="from_", default=None, help="start: seconds ('12.5s') or a frame ('300f')")
-    rp.add_argument("--to", default=None, help="end (exclusive): seconds or a frame")
+    rp.add_argument("--speed-mps", type=_number(0.0), default=None, help="the recording's speed when the log has none (default: unknown)")
+    rp.add_argument("--fps", type=_number(above=0.0), default=None, help="frame rate of an image folder (or to override a video's)")
+    rp.add_argument("--from", dest="from_", type=_position, default=None, help="start: seconds ('12.5s') or a frame ('300f')")
+    rp.add_argument("--to", type=_position, default=None, help="end (exclusive): seconds or a frame")
     rp.add_argument("--every", type=_count(1), default=1, help="process every N-th frame (N >= 1)")
     rp.add_argument("--video", action="store_true", help=VIDEO_HELP)
     rp.add_argument("--no-plots", action="store_true", help="skip timeline.png")
@@ -532,7 +574,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--video", action="store_true", help=VIDEO_HELP)
     run.set_defaults(func=cmd_run)
     suite = sub.add_parser("suite", help="every scenario guarded and with the baselines: a comparison table")
-    suite.add_argument("folder", nargs="?", default=None, help="folder of scenario files (default: the bundled library)")
+    suite.add_argument("folder", nargs="?", type=_folder, default=None, help="folder of scenario files (default: the bundled library)")
     suite.add_argument("--seeds", type=_count(1), default=10, help="seeds per scenario, >= 1 (default 10)")
     suite.add_argument("--out", type=_out_folder, default=None, help="output folder for runs.jsonl, suite.md and suite.json "
                        + OUT_HELP % "suite")
@@ -541,14 +583,15 @@ def build_parser() -> argparse.ArgumentParser:
     suite.add_argument("--verbose", action="store_true", help="print each run as it finishes")
     suite.set_defaults(func=cmd_suite)
     listing = sub.add_parser("scenarios", help="list the bundled scenarios (name and what each tests)")
-    listing.add_argument("folder", nargs="?", default=None, help="another folder of scenario files (default: the bundled library)")
+    listing.add_argument("folder", nargs="?", type=_folder, default=None,
+                         help="another folder of scenario files (default: the bundled library)")
     listing.set_defaults(func=cmd_scenarios)
     verify = sub.add_parser("verify", help="search every safety invariant with hypothesis for your rules, vehicle and steering")
     verify.add_argument("--rules", default=None, help="rule file (default: the bundled model-car rules)")
     verify.add_argument("--vehicle", default=None, help="vehicle preset name or vehicle.toml (default: VehicleLimits())")
     verify.add_argument("--steer", default=None, help="steering function module:function (default: scripted outputs)")
-    verify.add_argument("--examples", type=int, default=100, help="examples per invariant (default 100)")
-    verify.add_argument("--seed", type=int, default=0, help="search seed: the same seed tries the same examples (default 0)")
+    verify.add_argument("--examples", type=_count(1), default=100, help="examples per invariant (default 100)")
+    verify.add_argument("--seed", type=_count(0), default=0, help="search seed: the same seed tries the same examples (default 0)")
     verify.add_argument("--only", default=None, help="comma-separated invariant keys or numbers, e.g. 2,monotone")
     verify.add_argument("--out", default="fearguard-counterexamples", help="folder for counterexample files")
     verify.add_argument("--replay", default=None, help="re-run a counterexample file instead: exit 1 if it still fails")
@@ -557,17 +600,18 @@ def build_parser() -> argparse.ArgumentParser:
     dt.add_argument("map", nargs="?", default=None, help="map name, e.g. loop_empty, small_loop, zigzag_dists, straight_road")
     dt.add_argument("--out", default=None, help="output folder (log.jsonl, summary.json, drive.png, timeline.png, the video) "
                     + OUT_HELP % "duckietown")
-    dt.add_argument("--seconds", type=float, default=60.0, help="simulated duration (default 60)")
-    dt.add_argument("--cruise-mps", type=float, default=0.2, help="cruise speed (default 0.2 m/s)")
+    dt.add_argument("--seconds", type=_number(above=0.0), default=60.0, help="simulated duration (default 60)")
+    dt.add_argument("--cruise-mps", type=_number(above=0.0), default=0.2, help="cruise speed (default 0.2 m/s)")
     dt.add_argument("--obstacle", choices=("duck", "cone", "duckiebot"), default=None, help="a static obstacle on the lane ahead")
-    dt.add_argument("--ahead", type=float, default=1.0, help="its distance ahead of the front bumper along the lane (m, default 1.0)")
-    dt.add_argument("--remove-after", type=float, default=3.0, help="take it away after the robot stood still this long (s)")
+    dt.add_argument("--ahead", type=_number(above=0.0), default=1.0,
+                    help="its distance ahead of the front bumper along the lane (m, default 1.0)")
+    dt.add_argument("--remove-after", type=_number(0.0), default=3.0, help="take it away after the robot stood still this long (s)")
     dt.add_argument("--range", choices=("none", "tof"), default="none", help="range sensor: none (a DB18) or a front time-of-flight")
     dt.add_argument("--baseline", choices=("unguarded", "expert"), default=None,
                     help="unguarded: the lane steering alone at cruise; expert: the simulator's ground-truth pure pursuit")
     dt.add_argument("--domain-rand", action="store_true", help="the simulator's domain randomisation (lighting, colours, camera pose)")
-    dt.add_argument("--seed", type=int, default=0, help="random seed (domain randomisation, sensor noise)")
-    dt.add_argument("--width", type=int, default=320, help="camera width in pixels, 4:3 (default 320; 160 is faster)")
+    dt.add_argument("--seed", type=_count(0), default=0, help="random seed (domain randomisation, sensor noise)")
+    dt.add_argument("--width", type=_count(40), default=320, help="camera width in pixels, 4:3 (default 320; 160 is faster)")
     dt.add_argument("--rules", default=None, help="rule file (default: the bundled rules/duckiebot.toml)")
     dt.add_argument("--video", action="store_true", help=VIDEO_HELP)
     dt.add_argument("--no-plots", action="store_true", help="skip drive.png and timeline.png")
@@ -576,11 +620,11 @@ def build_parser() -> argparse.ArgumentParser:
     dts = sub.add_parser("duckietown-suite", help="the development maps guarded and with both baselines, obstacles, 10 randomised seeds")
     dts.add_argument("--out", default=None,
                      help="output folder (one folder per run, suite.md, suite.json) " + OUT_HELP % "duckietown-suite")
-    dts.add_argument("--seconds", type=float, default=60.0, help="duration of each drive (default 60)")
-    dts.add_argument("--seeds", type=int, default=10, help="domain-randomised seeds (default 10)")
+    dts.add_argument("--seconds", type=_number(above=0.0), default=60.0, help="duration of each drive (default 60)")
+    dts.add_argument("--seeds", type=_count(0), default=10, help="domain-randomised seeds (default 10)")
     dts.add_argument("--maps", nargs="*", default=None, help="lane maps (default: loop_empty small_loop zigzag_dists straight_road)")
-    dts.add_argument("--rand-seconds", type=float, default=None, help="duration of each randomised drive (default: --seconds)")
-    dts.add_argument("--jobs", type=int, default=1, help="drives at a time, each in its own process (default 1)")
+    dts.add_argument("--rand-seconds", type=_number(above=0.0), default=None, help="duration of each randomised drive (default: --seconds)")
+    dts.add_argument("--jobs", type=_count(1), default=1, help="drives at a time, each in its own process (default 1)")
     dts.set_defaults(func=cmd_duckietown_suite)
     return parser
 

@@ -13,7 +13,8 @@ from enum import Enum
 
 import numpy as np
 
-from fearguard.readings import cue_value
+from fearguard.errors import describe
+from fearguard.readings import cue_value, reading
 
 CUE_NAMES: tuple[str, ...] = (
     "lane_confidence",
@@ -80,6 +81,24 @@ class Cues:
     def as_array(self) -> np.ndarray:
         """The cues as a float vector in CUE_NAMES order (non-numbers become NaN)."""
         return np.array(self.values(), dtype=float)
+
+
+def unknown_note(name: str, raw: object) -> str | None:
+    """Why one cue's value counts as its worst (None when it is a valid reading): the one sentence for every caller.
+
+    ``raw`` is the value as given (the note names it); what is a number is ``readings.reading``'s decision, what is
+    inside the cue's range this module's ``CUE_SPECS``.
+    """
+    spec = CUE_SPECS[CUE_NAMES.index(name)]
+    value = reading(raw)
+    if value is None:
+        return f"{name} {describe(raw)} is not a number: counted as its worst value"
+    if math.isnan(value):
+        return f"{name} unknown (NaN): counted as its worst value"
+    if not spec.low <= value <= spec.high:
+        high = "inf" if math.isinf(spec.high) else f"{spec.high:g}"
+        return f"{name} {value!r} is outside {spec.low:g}..{high}: counted as its worst value"
+    return None
 
 
 def worst_filled(values: list[float], brightness_worst: float) -> tuple[list[float], list[bool]]:

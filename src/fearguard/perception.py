@@ -18,6 +18,7 @@ import numpy as np
 
 from fearguard.camera import CameraModel
 from fearguard.cues import Cues
+from fearguard.errors import describe
 from fearguard.observation import Lead, LeadBox, Observation
 from fearguard.readings import reading
 from fearguard.sensors.localisation import LocalisationState, QrLocaliser
@@ -93,6 +94,7 @@ class Perception:
         self._last_pixels: np.ndarray | None = None  # a private copy of the last new frame
         self._same_since_s = _NAN  # when the current frame content was first seen
         self._last_analysis: FrameAnalysis | None = None
+        self._range_noted = False  # a range reading reached a car that declares no range sensor, and the reasons said so
 
     def _new_localiser(self, spacing_m: float) -> QrLocaliser:
         """The QR localiser with the car's speed bound and route (VehicleLimits)."""
@@ -104,6 +106,7 @@ class Perception:
         self.ultrasonic.reset()
         self.localiser = self._new_localiser(self._marker_spacing_m)
         self._last_pixels, self._same_since_s, self._last_analysis = None, _NAN, None
+        self._range_noted = False
 
     def perceive(self, obs: Observation) -> Perceived:
         """Cues for one Observation; readings that are missing or not numbers count as missing."""
@@ -183,10 +186,11 @@ class Perception:
         self, obs: Observation, t: float, reasons: list[str], facts: list[str], seen: Obstacle | None = None
     ) -> tuple[float, RangeEstimate | None]:
         if not self.vehicle.has_ultrasonic:  # no range sensor: the camera's ground-plane range of an object in the lane
+            camera_m = math.inf
             if seen is not None and seen.range_m is not None:
                 facts.append(f"camera: object in the lane at {seen.range_m:.2f} m (ground plane, bearing {seen.bearing_deg:+.1f}°)")
-                return seen.range_m, None
-            return math.inf, None  # nothing seen in range, declared not faked
+                camera_m = seen.range_m
+            return min(camera_m, self._undeclared_range(obs, reasons)), None
         est = self.ultrasonic.update(t, obs.ultrasonic_range_m, obs.ultrasonic_echo_s)
         if math.isfinite(est.range_m):
             ttc = f", TTC {est.ttc_s:.1f} s" if math.isfinite(est.ttc_s) else ""
@@ -194,6 +198,23 @@ class Perception:
         if est.reason and (not est.accepted or math.isnan(est.range_m)):
             reasons.append(est.reason)
         return est.range_m, est
+
+    def _undeclared_range(self, obs: Observation, reasons: list[str]) -> float:
+        """A range reading given to a car that declares no range sensor: it counts (a reading that arrives is a reading).
+
+        Missing (None) or ``inf``: nothing known in range. A finite reading: its metres (beyond the sensor's maximum:
+        the maximum), noted once. Anything else that arrives (NaN, negative, text): unknown, NaN (worst)."""
+        given = obs.ultrasonic_range_m
+        if given is None:
+            return math.inf
+        value = reading(given)
+        if value is None or not value >= 0.0:
+            reasons.append(f"range reading {describe(given)} is not a range: unknown (worst)")
+            return math.nan
+        if math.isfinite(value) and not self._range_noted:
+            self._range_noted = True
+            reasons.append(f"range reading {value:.4g} m given on a car that declares no range sensor (has_ultrasonic = false): counted")
+        return clamp_to_sensor(value, self.vehicle, reasons)
 
     # -- QR localisation -------------------------------------------------------------------------
     def _staleness(
@@ -216,6 +237,18 @@ class Perception:
         if abs(lead.bearing_deg) <= ULTRASONIC_CONE_DEG / 2:
             return Lead(lead.bearing_deg, range_m)
         return lead
+
+
+def clamp_to_sensor(range_m: float, vehicle: VehicleLimits, notes: list[str]) -> float:
+    """A finite range beyond the range sensor's maximum counts as the maximum — "nothing within the maximum", what
+    ``inf`` means for a car with the sensor — never as that many metres (a worse-looking reading must not buy a higher
+    limit than "nothing in range" gives). Within the maximum, and ``inf``, unchanged."""
+    top = vehicle.ultrasonic_max_range_m
+    if math.isfinite(range_m) and range_m > top:
+        notes.append(f"obstacle_range_m {range_m:.4g} m is beyond the range sensor's maximum {top:g} m: counted as "
+                     f"nothing within {top:g} m")
+        return top
+    return range_m
 
 
 SAMPLE_STRIDE = 997  # [bytes] the quick look at a frame before comparing all of it (prime: no alignment with rows or channels)

@@ -324,12 +324,30 @@ class EmergencyPlan:
     cap_mps: float
     steering_deg: float | None
     why: str
+    cause: Cause | None = None  # the hazard this plan answers; None for a fault
 
 
 def active_causes(cause_fears: Mapping[Cause, float], state: ModeState, cfg: PolicyConfig) -> frozenset[Cause]:
     """Causes an EMERGENCY plan answers: latched at or since entry, or now at or above the exit threshold."""
     now = {c for c in Cause if cause_fears.get(c, 0.0) >= cfg.emergency_exit_fear}
     return frozenset({c for c, _ in state.latched} | now)
+
+
+CAUSE_WORDS = {  # what each cause means, for reasons that name it after its fear has gone
+    Cause.COLLISION: "a collision risk",
+    Cause.ROAD: "the road picture was lost",
+    Cause.LOCALISATION: "the localisation went stale",
+}
+
+
+def _cause_text(cause: Cause, fear: float, state: ModeState, cfg: PolicyConfig, t_s: float | None) -> str:
+    """Why a cause is active: its fear now, or — latched, its fear already below the exit threshold — the hold."""
+    below = dict(state.latched).get(cause)
+    if below is None or fear >= cfg.emergency_exit_fear:
+        return {Cause.COLLISION: f"collision risk (fear {fear:.2f})", Cause.ROAD: f"road not trusted (fear {fear:.2f})",
+                Cause.LOCALISATION: f"localisation stale (fear {fear:.2f})"}[cause]
+    left = f" ({max(0.0, cfg.hold_s - (t_s - below)):.1f} s left)" if t_s is not None else ""
+    return f"holding EMERGENCY for {cfg.hold_s:g} s after {CAUSE_WORDS[cause]}{left}"
 
 
 def emergency_plan(
@@ -340,42 +358,44 @@ def emergency_plan(
     cfg: PolicyConfig,
     vehicle: VehicleLimits,
     creep: str = "",
+    t_s: float | None = None,
 ) -> EmergencyPlan:
     """Analyse, then act: every active cause proposes a plan; the one with the lowest cap wins.
 
     Active: latched at or since entry, or now at or above the exit threshold. A cue getting worse can
     only add causes, so it can only lower the cap: the speed limit stays monotone in every cue.
     ``creep`` (the recovery's reason, empty = none): the road-picture stop becomes a bounded CRAWL to
-    re-acquire the road (the supervisor allows it only with the range clear and no fault).
+    re-acquire the road (the supervisor allows it only with the range clear and no fault). ``t_s`` (now) lets
+    a cause kept by the hold say how long is left.
     """
     active = active_causes(cause_fears, state, cfg)
     stop = EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg, f"fault: stop, holding {held_steering_deg:+.1f} deg")
     plans = [stop] if state.fault else []
     crawl_cap = cfg.crawl_fraction * vehicle.max_speed_mps
     for cause in sorted(active, key=list(Cause).index):
-        f = cause_fears.get(cause, 0.0)
+        why = _cause_text(cause, cause_fears.get(cause, 0.0), state, cfg, t_s)
         if cause is Cause.COLLISION:
-            plans.append(EmergencyPlan(Strategy.STOP, 0.0, None, f"collision risk (fear {f:.2f}): stop"))
+            plans.append(EmergencyPlan(Strategy.STOP, 0.0, None, f"{why}: stop", cause))
         elif cause is Cause.ROAD and lead is not None and lead.usable:
             rng = lead.usable_range_m
             cap = rng / cfg.follow_time_gap_s if rng is not None else crawl_cap
             bearing = float(lead.bearing_deg)  # usable: a reading (readings.py), e.g. a Fraction, as a float
             steer = float(np.clip(cfg.follow_gain * bearing, -vehicle.max_steering_deg, vehicle.max_steering_deg))
             gap = f"range {rng:.2f} m, {cfg.follow_time_gap_s:.1f} s gap" if rng is not None else "no range: crawl speed"
-            why = f"road not trusted (fear {f:.2f}): follow the lead at bearing {bearing:+.1f} deg ({gap})"
-            plans.append(EmergencyPlan(Strategy.FOLLOW_LEAD, cap, steer, why))
+            follow = f"{why}: follow the lead at bearing {bearing:+.1f} deg ({gap})"
+            plans.append(EmergencyPlan(Strategy.FOLLOW_LEAD, cap, steer, follow, cause))
         elif cause is Cause.ROAD and creep:
-            why = f"road not trusted (fear {f:.2f}), range clear: {creep}, holding {held_steering_deg:+.1f} deg"
-            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap, held_steering_deg, why))
+            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap, held_steering_deg,
+                                       f"{why}, range clear: {creep}, holding {held_steering_deg:+.1f} deg", cause))
         elif cause is Cause.ROAD:
-            why = f"road not trusted (fear {f:.2f}) and no lead to follow: stop, holding {held_steering_deg:+.1f} deg"
-            plans.append(EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg, why))
+            plans.append(EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg,
+                                       f"{why} and no lead to follow: stop, holding {held_steering_deg:+.1f} deg", cause))
         else:
-            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap, None, f"localisation stale (fear {f:.2f}): crawl"))
+            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap, None, f"{why}: crawl", cause))
     best = min(plans, key=lambda p: (p.cap_mps, _Priority[p.strategy.name].value), default=stop)
     road_steer = [p.steering_deg for p in plans if p.steering_deg is not None]
     steering = best.steering_deg if best.steering_deg is not None else (road_steer[0] if road_steer else None)
-    return EmergencyPlan(best.strategy, best.cap_mps, steering, best.why)
+    return EmergencyPlan(best.strategy, best.cap_mps, steering, best.why, best.cause)
 
 
 # -- recovery: analyse, then act ------------------------------------------------------------------

@@ -2,7 +2,8 @@
 
 Bounded: a file is at most ``MAX_TEXT_BYTES``, nested at most ``MAX_NESTING`` levels of ``[ ]``/``{ }``
 (checked on the text before tomllib or json recurse into it, so depth can never become a
-RecursionError), and holds no integer outside 64 bits (TOML's own rule; a bigger one cannot become a
+RecursionError) and of tables in all (dotted keys nest without a bracket: checked on the parsed document by an
+iterative walk), and holds no integer outside 64 bits (TOML's own rule; a bigger one cannot become a
 float). Strict: ``Table`` reads one TOML table and rejects unknown keys first, with "did you mean" (a
 typo must never be ignored), then hands out typed values with their defaults. Every failure is the
 caller's ``FileError`` kind (errors.py) naming the file, the line and the key path.
@@ -89,16 +90,34 @@ def _skip_string(text: str, i: int, line: int, toml: bool) -> tuple[int, int]:
     return j, line
 
 
+def nesting_depth(value: object) -> int:
+    """Levels of tables and arrays in a parsed document (iterative: a document of dotted keys such as
+    ``a.a.a…= 1`` nests without a bracket, so the text scan cannot bound it and a recursive walk would overflow)."""
+    deepest, stack = 0, [(value, 0)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, Mapping):
+            children: Iterable[object] = item.values()
+        elif isinstance(item, list):
+            children = item
+        else:
+            continue
+        deepest = max(deepest, depth + 1)
+        stack.extend((child, depth + 1) for child in children)
+    return deepest
+
+
 def _big_integers(value: object, path: str = "") -> Iterator[str]:
-    """Key paths of integers outside INT_RANGE (a parsed document is at most MAX_NESTING deep)."""
-    if isinstance(value, Mapping):
-        for k, v in value.items():
-            yield from _big_integers(v, f"{path}.{k}" if path else str(k))
-    elif isinstance(value, list):
-        for i, v in enumerate(value):
-            yield from _big_integers(v, f"{path}[{i}]")
-    elif isinstance(value, int) and not isinstance(value, bool) and not INT_RANGE[0] <= value <= INT_RANGE[1]:
-        yield path
+    """Key paths of integers outside INT_RANGE (iterative; callers check ``nesting_depth`` first)."""
+    stack: list[tuple[object, str]] = [(value, path)]
+    while stack:
+        item, where = stack.pop()
+        if isinstance(item, Mapping):
+            stack.extend((v, f"{where}.{k}" if where else str(k)) for k, v in reversed(list(item.items())))
+        elif isinstance(item, list):
+            stack.extend((v, f"{where}[{i}]") for i, v in reversed(list(enumerate(item))))
+        elif isinstance(item, int) and not isinstance(item, bool) and not INT_RANGE[0] <= item <= INT_RANGE[1]:
+            yield where
 
 
 def loads_json(text: str) -> Any:
@@ -111,6 +130,9 @@ def loads_json(text: str) -> Any:
         value = json.loads(text)
     except RecursionError:  # unreachable after the depth scan; kept so no recursion can escape as a traceback
         raise ValueError(f"nested deeper than {MAX_NESTING} levels") from None
+    depth = nesting_depth(value)
+    if depth > MAX_NESTING:
+        raise ValueError(f"nested {depth} levels deep, more than {MAX_NESTING}")
     for key in _big_integers(value):
         raise ValueError(f"integer at {key or 'top level'} outside the 64-bit range")
     return value
@@ -142,6 +164,10 @@ def parse_toml(path: str | Path, text: str, error: ErrorKind) -> tuple[dict[str,
         raise error(path, "TOML syntax", f"{exc}; fix the syntax at that line") from None
     except (ValueError, RecursionError) as exc:  # e.g. an integer of more than 4300 digits
         raise error(path, "TOML syntax", f"cannot be read ({exc})") from None
+    depth = nesting_depth(data)
+    if depth > MAX_NESTING:  # dotted keys (a.b.c = 1, [a.b.c]) nest without brackets
+        raise error(path, "structure", f"tables nested {depth} levels deep (dotted keys or headers), more than the "
+                                       f"{MAX_NESTING} a file may have; the deepest shipped file uses 3")
     for key in _big_integers(data):
         raise src.error(key, "integer outside the 64-bit range TOML allows; write a smaller number")
     return data, src

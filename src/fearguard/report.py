@@ -18,6 +18,7 @@ from typing import Any, TextIO
 from fearguard.cues import CUE_NAMES
 from fearguard.fear import FearLevel
 from fearguard.policy import Mode
+from fearguard.reader import loads_json
 from fearguard.supervisor import Command
 
 MODE_ORDER = tuple(m.name for m in Mode)
@@ -85,7 +86,7 @@ def read_jsonl(path: str | Path) -> list[dict[str, Any]]:
     for line in Path(path).read_text(encoding="utf-8").splitlines():
         if line.strip():
             try:
-                records.append(json.loads(line))
-            except json.JSONDecodeError:
+                records.append(loads_json(line))
+            except ValueError:  # JSONDecodeError, or beyond the reader's bounds
                 break
     return records

@@ -18,14 +18,14 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from fearguard.camera import CameraModel
-from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues, worst_filled
+from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues, unknown_note, worst_filled
 from fearguard.errors import describe, describe_exception
 from fearguard.fear import Cause, FearLevel, FearResult
 from fearguard.fuzzy.loader import load_rules
 from fearguard.fuzzy.rulebase import RuleBase
 from fearguard.lane_check import LaneCheck, lane_check
 from fearguard.observation import Lead, Observation  # Observation re-exported: fearguard.supervisor.Observation keeps working
-from fearguard.perception import FrameSteering, Perceived, Perception
+from fearguard.perception import FrameSteering, Perceived, Perception, clamp_to_sensor
 from fearguard.policy import (
     Mode,
     ModeState,
@@ -89,6 +89,7 @@ class _State:
     out_steering_deg: float | None = None  # last steering answered (the rate limit starts from it)
     estimator_distrusted: bool = False  # the last lane check overrode the wrapped steering
     recovery: Recovery = field(default_factory=Recovery)
+    range_noted: bool = False  # a range was given to a car that declares no range sensor, and the reasons said so
     raw_steering: deque[float] = field(default_factory=deque)  # the last oscillation_flips + 1 wrapped angles
     periods_s: deque[float] = field(default_factory=lambda: deque(maxlen=PERIOD_MEMORY))
     ranges: deque[tuple[float, float]] = field(default_factory=lambda: deque(maxlen=RANGE_MEMORY))
@@ -146,6 +147,9 @@ class FearGuard:
             return self._fault_command(obs, f"fault: time t_s={describe(obs.t_s)} is not a finite number", None)
         if st.last_t_s is not None and t <= st.last_t_s:
             return self._fault_command(obs, f"fault: time did not increase ({st.last_t_s:.3f} s → {t:.3f} s)", t)
+        if obs.cues is not None and not isinstance(obs.cues, Cues):  # e.g. a dict: not cues the caller meant to be read
+            return self._fault_command(obs, f"fault: Observation.cues must be a fearguard.Cues (or None), got "
+                                            f"{type(obs.cues).__name__}", t)
         stall = self._watchdog(t)
         cues, cue_notes, perceived, lead = self._cues(obs)
         result = self.rules.evaluate(cues)
@@ -184,19 +188,36 @@ class FearGuard:
         perceived: Perceived | None = None
         lead = obs.lead if isinstance(obs.lead, Lead) else None
         if isinstance(obs.cues, Cues):
+            raw = [getattr(obs.cues, name) for name in CUE_NAMES]
             values = obs.cues.values()
-            if not self.vehicle.has_ultrasonic:
-                values[OBSTACLE_RANGE] = math.inf  # no sensor: nothing known in range, declared not faked
+            values[OBSTACLE_RANGE] = self._given_range(values[OBSTACLE_RANGE], notes)
             if not self.vehicle.has_qr_localisation:
                 values[QR_STALENESS] = 0.0  # no QR localisation on this car: the cue does not apply
         else:  # perception owns absent sensors: no range sensor is the camera's ground-plane range of an object, or inf
             perceived = self.perception.perceive(obs)
             values, lead = perceived.cues.values(), perceived.lead
+            raw = list(values)
             notes.extend(perceived.alerts)
-        for name, v in zip(CUE_NAMES, values, strict=True):
-            if not isinstance(v, float) or math.isnan(v):
-                notes.append(f"{name} unknown: counted as its worst value")
+        for name, given, v in zip(CUE_NAMES, raw, values, strict=True):
+            note = unknown_note(name, given) or unknown_note(name, v)
+            if note:
+                notes.append(note)
         return Cues(*values), notes, perceived, lead
+
+    def _given_range(self, range_m: float, notes: list[str]) -> float:
+        """A range the caller gave, as policy and fear read it: a finite reading always counts, whatever the vehicle
+        declares; one beyond the sensor's maximum counts as "nothing within the maximum" (never as that many metres).
+
+        On a car that declares no range sensor only ``inf`` means "nothing known in range"; a finite reading says there
+        is a sensor after all (a one-line note the first time). Unknown values stay unknown (worst)."""
+        v, st = self.vehicle, self._state
+        if not (0.0 <= range_m < math.inf):
+            return range_m
+        if not v.has_ultrasonic and not st.range_noted:
+            st.range_noted = True
+            notes.append(f"obstacle_range_m {range_m:.4g} m given on a car that declares no range sensor "
+                         f"(has_ultrasonic = false): counted")
+        return clamp_to_sensor(range_m, v, notes)
 
     def _steering(self, obs: Observation, perceived: Perceived | None) -> tuple[float, str]:
         """The wrapped steering's angle: from this frame's analysis for a FrameSteering, else from the frame."""
@@ -241,7 +262,8 @@ class FearGuard:
         # nothing in range: an obstacle may stand just beyond what the range sensor sees (stop within the seen distance)
         seen_m = range_m if math.isfinite(range_m) or not v.has_ultrasonic else v.ultrasonic_max_range_m
         envelope = envelope_speed_mps(seen_m, v, lead_speed_mps(speed, closing) if seen_m == range_m else 0.0)
-        reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {result.dominant_cause.value}"]
+        cause = self._dominant_cause(result, range_m)
+        reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {cause.value}"]
         road_calm = result.cause_fears[Cause.ROAD] < cfg.caution_fear
         check = self._lane_check(perceived, steering, speed_now) if road_calm else None
         wanted, caps, mode, strategy = steering, [fear_limit, envelope], st.mode.mode, Strategy.PASS_THROUGH
@@ -261,8 +283,8 @@ class FearGuard:
             active = active_causes(result.cause_fears, st.mode, cfg)
             eligible, seen = recovery_eligible(st.mode, active, range_m, lead, imminent), self._lane_seen(cues, perceived)
             st.recovery, creep = next_recovery(st.recovery, eligible, t, dt, speed_now, cfg, seen)
-            plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep)
-            strategy = plan.strategy
+            plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t)
+            strategy, cause = plan.strategy, plan.cause or cause
             caps.append(plan.cap_mps)
             wanted = plan.steering_deg if plan.steering_deg is not None else wanted
             reasons.append(f"EMERGENCY {strategy.name}: {plan.why}")
@@ -299,7 +321,7 @@ class FearGuard:
         return Command(
             steering_deg=out_steering, speed_limit_mps=limit, mode=mode, strategy=strategy, fear=result.fear,
             fear_level=result.level, cues=cues, reasons=tuple(reasons), fear_limit_mps=fear_limit, envelope_mps=envelope,
-            cause=result.dominant_cause, perceived=perceived, closing_speed_mps=math.nan if closing is None else closing,
+            cause=cause, perceived=perceived, closing_speed_mps=math.nan if closing is None else closing,
         )
 
     def _lane_seen(self, cues: Cues, perceived: Perceived | None) -> bool:
@@ -350,6 +372,17 @@ class FearGuard:
                                  analysis.steering_deg)
         cfg = self.rules.policy
         return lane_check(geometry, steering, speed_now, self.vehicle, cfg.lane_check_lookahead_s, cfg.lane_check_min_deg)
+
+    def _dominant_cause(self, result: FearResult, range_m: float) -> Cause:
+        """The cause with the largest fear among those that can apply to this car: a collision needs a range sensor or
+        a range (given, seen by the camera, or unknown); localisation needs QR localisation. Ties: road first, the one
+        every car has; then collision, then localisation."""
+        applies = [Cause.ROAD]
+        if self.vehicle.has_ultrasonic or not math.isinf(range_m):
+            applies.append(Cause.COLLISION)
+        if self.vehicle.has_qr_localisation:
+            applies.append(Cause.LOCALISATION)
+        return max(applies, key=lambda c: (result.cause_fears.get(c, 0.0), -applies.index(c)))
 
     @staticmethod
     def _range_for_policy(cues: Cues) -> float:

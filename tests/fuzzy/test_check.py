@@ -67,3 +67,22 @@ def test_incomplete_rule_base_fails(write_rules, capsys) -> None:
 def test_bad_file_exits_2(tmp_path: Path, capsys) -> None:
     assert main(["rules", "check", str(tmp_path / "missing.toml")]) == 2
     assert "RuleError:" in capsys.readouterr().err
+
+
+def test_rules_check_fails_a_file_whose_lost_lane_rule_shrugs(write_rules) -> None:
+    """Issue 31: complete and monotone, yet a lost lane gave NORMAL at full speed; the promises line catches it."""
+    from fearguard.fuzzy.check import check_rules
+
+    path = write_rules(('"IF lane_confidence IS low THEN fear IS high"', '"IF lane_confidence IS low THEN fear IS low"'))
+    report = check_rules(fg.load_rules(path))
+    assert not report.ok and all(g.ok for g in report.groups) and report.thresholds.ok
+    text = "\n".join(report.lines())
+    assert "UNREACHED lane_confidence 0 alone (its worst value" in text and "'IF lane_confidence IS low THEN fear IS low'" in text
+
+
+@pytest.mark.parametrize("name", ["default.toml", "road_car.toml", "duckiebot.toml"])
+def test_every_bundled_rule_file_keeps_every_promise(name: str) -> None:
+    from fearguard.fuzzy.promises import check_promises
+
+    reaches = check_promises(fg.load_rules(f"rules/{name}"))
+    assert len(reaches) >= 15 and all(r.ok for r in reaches), [r.line() for r in reaches if not r.ok]

@@ -74,6 +74,8 @@ medium = { trimf = [0.15, 0.3, 0.45] }
 high = { trimf = [0.3, 0.45, 0.6] }
 very_high = { trimf = [0.45, 0.6, 0.6] }""")
 HOLD_0 = ("hold_s = 2.0 ", "hold_s = 0.0 ")
+LANE_LOW = ('"IF lane_confidence IS low THEN fear IS high"', '"IF lane_confidence IS low THEN fear IS low"')  # blind at full speed
+NEAR_VERY_LOW = ('"IF obstacle_range_m IS near THEN fear IS high"', '"IF obstacle_range_m IS near THEN fear IS very_low"')
 
 
 @pytest.mark.slow
@@ -81,6 +83,8 @@ HOLD_0 = ("hold_s = 2.0 ", "hold_s = 0.0 ")
     ("inverted.toml", INVERTED, "3", "monotone in each cue"),
     ("low_fear.toml", LOW_FEAR, "4", "no EMERGENCY within enter_frames"),
     ("hold0.toml", HOLD_0, "5", "a latch of 0 s lets the mode chatter"),
+    ("lane_low.toml", LANE_LOW, "11", "the rule that should have fired: 'IF lane_confidence IS low THEN fear IS low'"),
+    ("near_very_low.toml", NEAR_VERY_LOW, "11", "obstacle_range_m 0.7 alone (the core of 'near'"),
 ])
 def test_a_broken_rule_file_fails_with_a_counterexample_that_replays(tmp_path, capsys, name, edit, only, expected) -> None:
     path = broken_rules(tmp_path, name, *edit)
@@ -141,6 +145,22 @@ def test_a_bad_file_is_rejected_with_exit_2(tmp_path, capsys, monkeypatch, args,
     (tmp_path / "typo.toml").write_text("max_sped_mps = 2.0\n")
     code, out = verify(tmp_path, capsys, *args)
     assert code == 2 and says in out and ("unknown" in out or "typo" not in args[-1]), out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("name", "edit"), [("lane_low.toml", LANE_LOW), ("near_very_low.toml", NEAR_VERY_LOW),
+                                            ("low_fear.toml", LOW_FEAR), ("hold0.toml", HOLD_0)])
+def test_verify_of_every_invariant_exits_1_on_a_rule_file_that_breaks_a_promise(tmp_path, name, edit) -> None:
+    """Issue 31: each of these files passed `fearguard verify` once; the whole table (no --only) must now fail."""
+    code, out = verify_as_a_user(tmp_path, "--rules", str(broken_rules(tmp_path, name, *edit)), "--examples", "20")
+    assert code == 1 and "FAILED" in out, out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("rules", ["default.toml", "road_car.toml", "duckiebot.toml"])
+def test_verify_of_every_invariant_exits_0_on_every_bundled_rule_file(tmp_path, rules) -> None:
+    code, out = verify_as_a_user(tmp_path, "--rules", str(RULES / rules), "--examples", "20")
+    assert code == 0 and "0 failed" in out, out
 
 
 def test_the_bundled_default_passes_every_invariant(tmp_path, capsys) -> None:

@@ -10,7 +10,9 @@ Reachable: with every cue at its worst (unknown), each cause the rule base grade
 policy's ``emergency_enter_fear`` (else EMERGENCY can never be entered for it), and calm cues (lane
 seen, brightness mid-band, nothing hidden, nothing in range, just localised) must stay below
 ``caution_fear`` (else the car can never drive freely). Monotone fear between the two then covers
-every case in between.
+every case in between. And each hazard alone must reach the response the design promises for it
+(``fuzzy/promises.py``): a lost lane, EMERGENCY; darkness, at least CAUTION; … — monotone and complete do not
+catch an inverted consequent.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import numpy as np
 from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens
 from fearguard.fear import Cause
 from fearguard.fuzzy.model import Group
+from fearguard.fuzzy.promises import Reach, check_promises
 from fearguard.fuzzy.rulebase import RuleBase
 
 GRID_BUDGET = 250_000  # [points] per group
@@ -91,10 +94,11 @@ class CheckReport:
     rules: RuleBase
     groups: tuple[GroupCheck, ...]
     thresholds: ThresholdCheck
+    promises: tuple[Reach, ...] = ()  # each hazard alone against the response it must reach (fuzzy/promises.py)
 
     @property
     def ok(self) -> bool:
-        return all(g.ok for g in self.groups) and self.thresholds.ok
+        return all(g.ok for g in self.groups) and self.thresholds.ok and all(r.ok for r in self.promises)
 
     def lines(self) -> list[str]:
         rb = self.rules
@@ -107,8 +111,11 @@ class CheckReport:
             out.extend(f"      no rule fires at {u}" for u in g.uncovered)
             out.extend(f"      {v}" for v in g.violations)
         out.extend(self.thresholds.lines())
-        out.append("OK: every group is complete and monotone, so fear is too; the policy thresholds are reachable."
-                   if self.ok else "FAILED: see above.")
+        kept = sum(r.ok for r in self.promises)
+        out.append(f"  promises       each hazard alone (the others calm) reaches its response: {kept} of {len(self.promises)}")
+        out.extend(r.line() for r in self.promises if not r.ok)
+        out.append("OK: every group is complete and monotone, so fear is too; the policy thresholds are reachable and "
+                   "each hazard alone reaches its response." if self.ok else "FAILED: see above.")
         return out
 
 
@@ -176,4 +183,5 @@ def check_group(rb: RuleBase, gi: int, group: Group, examples: int = 3) -> Group
 
 def check_rules(rb: RuleBase) -> CheckReport:
     """Sweep every group and test the thresholds; the report says where completeness, monotonicity or reach fails."""
-    return CheckReport(rb, tuple(check_group(rb, gi, g) for gi, g in enumerate(rb.groups)), check_thresholds(rb))
+    return CheckReport(rb, tuple(check_group(rb, gi, g) for gi, g in enumerate(rb.groups)), check_thresholds(rb),
+                       check_promises(rb))

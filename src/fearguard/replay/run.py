@@ -83,6 +83,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera)
     start = parse_position(options.start, source.fps) if options.start else 0
     stop_at = parse_position(options.stop, source.fps) if options.stop else None
+    _check_span(source_path, source.expected_frames, source.fps, start, stop_at, options)
     expected = _expected(source.expected_frames, start, stop_at, options.every)
     frames = source.iter_frames(start, stop_at, options.every)
     ahead = options.read_ahead if options.read_ahead is not None else usable_cores() > 1
@@ -134,6 +135,18 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
         summary.update(interrupted=True, stopped_by=stop.name)
         recorder.write_summary(summary)
     return ReplayResult(summary, out, interrupted, stats, recorder.video_path, stop.name if stop else None)
+
+
+def _check_span(path: str | Path, total: int | None, fps: float, start: int, stop: int | None, options: ReplayOptions) -> None:
+    """``--from`` inside the recording (when its length is known), ``--to`` after ``--from``; a speed that is a speed."""
+    if total is not None and start >= total:
+        raise SourceError(str(path), "--from", f"{options.start!r} is frame {start}, but the recording has {total} frames "
+                                               f"({total / fps:.1f} s at {fps:g} fps): start inside it")
+    if stop is not None and stop <= start:
+        raise SourceError(str(path), "--to", f"{options.stop!r} (frame {stop}) is not after --from (frame {start})")
+    speed = options.speed_mps
+    if speed is not None and not (isinstance(speed, int | float) and not isinstance(speed, bool) and 0.0 <= speed < math.inf):
+        raise SourceError(str(path), "--speed-mps", f"must be a finite speed >= 0, got {speed!r}")
 
 
 def _expected(total: int | None, start: int, stop: int | None, every: int) -> int | None:

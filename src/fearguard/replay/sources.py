@@ -488,9 +488,17 @@ def _image_files(folder: Path) -> list[Path]:
 _POSITION = re.compile(r"(?:(?P<frames>\d+)\s*f|(?P<seconds>\d+(?:\.\d*)?|\.\d+)\s*s?)", re.IGNORECASE)
 
 
+POSITION_FORMS = "use seconds ('12.5s' or '12.5') or a frame number ('300f')"
+
+
+def position_form_ok(text: object) -> bool:
+    """Whether ``text`` reads as a position (the form only; whether it lies inside a recording needs the recording)."""
+    return isinstance(text, str) and _POSITION.fullmatch(text.strip()) is not None
+
+
 def parse_position(text: str, fps: float) -> int:
     """Frame index for ``--from/--to``: seconds ("12.5s" or "12.5") → first frame at or after it; frames ("300f")."""
-    forms = "use seconds ('12.5s' or '12.5') or a frame number ('300f')"
+    forms = POSITION_FORMS
     match = _POSITION.fullmatch(text.strip()) if isinstance(text, str) else None
     if match is None:
         raise SourceError(None, "", f"cannot read position {text!r}: {forms}")

@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fearguard.errors import ScenarioError
 from fearguard.interrupt import StopSignal
 from fearguard.recorder import SUMMARY_NAME, write_json
 from fearguard.report import JsonlLog, read_jsonl
@@ -34,8 +35,15 @@ BENIGN = ("clear_straight", "s_curves")  # scenarios without a hazard: the false
 
 
 def scenario_files(folder: str | Path | None = None) -> list[Path]:
-    """The *.toml scenarios of a folder (default: the bundled library), sorted by name."""
-    return sorted(Path(folder or BUNDLED).glob("*.toml"))
+    """The *.toml scenarios of a folder (default: the bundled library), sorted by name; a folder that is missing or
+    holds none is a ScenarioError (a listing that prints nothing would look like success)."""
+    where = Path(folder or BUNDLED)
+    if not where.is_dir():
+        raise ScenarioError(where, "folder", "no such folder; give a folder of scenario files (*.toml)")
+    found = sorted(where.glob("*.toml"))
+    if not found:
+        raise ScenarioError(where, "folder", "holds no scenario files (*.toml); `fearguard scenarios` lists the bundled ones")
+    return found
 
 
 def run_to_folder(

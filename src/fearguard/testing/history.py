@@ -35,6 +35,7 @@ import numpy as np
 import fearguard as fg
 from fearguard.cues import CUE_NAMES
 from fearguard.errors import FearguardError
+from fearguard.reader import loads_json
 
 FORMAT_VERSION = 1
 OBSERVATION_NUMBERS = ("t_s", "speed_mps", "ultrasonic_range_m", "ultrasonic_echo_s", "odometer_m", "range_rate_mps")
@@ -264,9 +265,11 @@ def load_case(path: str | Path) -> tuple[dict[str, Any], Case]:
         if not line.strip():
             continue
         try:
-            rec = json.loads(line)
+            rec = loads_json(line)
         except json.JSONDecodeError as exc:
             raise HistoryError(path, n, f"not JSON ({exc.msg})") from None
+        except ValueError as exc:  # beyond the reader's bounds: too long, too deep, a too-big integer
+            raise HistoryError(path, n, str(exc)) from None
         if not isinstance(rec, dict):
             raise HistoryError(path, n, "each line must be a JSON object")
         if rec.get("fearguard") == "counterexample":

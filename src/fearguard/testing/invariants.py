@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 
 import fearguard as fg
 from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens
+from fearguard.fuzzy.promises import Promise, Response, promises, rule_for
 from fearguard.readings import finite_reading
 from fearguard.testing import strategies as fs
 from fearguard.testing.history import Case, FrameSpec, SteerRaises, Step
@@ -50,6 +51,7 @@ class Invariant:
     check: CheckFn
     pending: str = ""  # not checkable on this fearguard yet: why (reported as skipped)
     prefix_closed: bool = False  # a violation at frame i is one of every longer drive too: a counterexample can be cut after it
+    narrow: Callable[[Subject, Case], Case] | None = None  # after shrinking: the part of a case that shows the failure
 
 
 # -- shared helpers -----------------------------------------------------------------------------
@@ -248,12 +250,12 @@ def check_monotone(subject: Subject, case: Case) -> str | None:
     cb, cw = case.run("better")[-1].cues, case.run("worse")[-1].cues
     assert cb is not None and cw is not None
     rb = subject.rules
-    swept = _fear_sweep(rb, cb, str(case.params.get("cue")), subject.vehicle)
-    if swept:
-        return swept
     fb, fw = rb.evaluate(cb).fear, rb.evaluate(cw).fear
     if fw < fb - FEAR_TOL:
         return f"{what}: the rules' fear falls {fb:.6g} → {fw:.6g}"
+    swept = _fear_sweep(rb, cb, str(case.params.get("cue")), subject.vehicle)
+    if swept:
+        return swept
     batch = rb.evaluate_batch(np.array([cb.as_array(), cw.as_array()]))
     if batch[1] < batch[0] - FEAR_TOL:
         return f"{what}: evaluate_batch's fear falls {batch[0]:.6g} → {batch[1]:.6g}"
@@ -285,8 +287,9 @@ def worsening_path(cues: fg.Cues, name: str, rules: fg.RuleBase, vehicle: fg.Veh
     return path
 
 
-def _fear_sweep(rules: fg.RuleBase, cues: fg.Cues, name: str, vehicle: fg.VehicleLimits) -> str | None:
-    """Fear along the whole worsening path of one cue, the other cues fixed: it must never fall."""
+def _sweep_drop(rules: fg.RuleBase, cues: fg.Cues, name: str, vehicle: fg.VehicleLimits) -> tuple[fg.Cues, fg.Cues, float, float] | None:
+    """Fear along the whole worsening path of one cue, the other cues fixed: the first step where it falls
+    (the better and the worse cues, their fears), or None."""
     path = worsening_path(cues, name, rules, vehicle)
     if len(path) < 2:
         return None
@@ -296,8 +299,35 @@ def _fear_sweep(rules: fg.RuleBase, cues: fg.Cues, name: str, vehicle: fg.Vehicl
     if not drops.size:
         return None
     k = int(drops[0])
-    return (f"the rules' fear falls {fear[k]:.6g} → {fear[k + 1]:.6g} when {name} worsens {path[k]:.6g} → {path[k + 1]:.6g} "
-            f"(the other cues as in {cues})")
+    return replace(cues, **{name: path[k]}), replace(cues, **{name: path[k + 1]}), float(fear[k]), float(fear[k + 1])
+
+
+def _fear_sweep(rules: fg.RuleBase, cues: fg.Cues, name: str, vehicle: fg.VehicleLimits) -> str | None:
+    """Fear along the worsening path of one cue from these cues, and from the calm picture (a drop a busy picture
+    masks shows there): it must never fall."""
+    for base in (cues, fs.best_cues(rules)):
+        drop = _sweep_drop(rules, base, name, vehicle)
+        if drop is not None:
+            b, w, fb, fw = drop
+            return (f"the rules' fear falls {fb:.6g} → {fw:.6g} when {name} worsens {getattr(b, name):.6g} → "
+                    f"{getattr(w, name):.6g} (the other cues as in {b})")
+    return None
+
+
+def _monotone_at_drop(subject: Subject, case: Case) -> Case:
+    """A rules-level drop found by the sweep, put on the last frames of the case: the history shows the failing values."""
+    name = str(case.params.get("cue"))
+    if case.params.get("kind") == "closing" or name not in CUE_NAMES:
+        return case
+    better = case.run("better")
+    for base in (better[-1].cues, fs.best_cues(subject.rules)):
+        drop = _sweep_drop(subject.rules, base, name, subject.vehicle) if base is not None else None
+        if drop is not None:
+            b, w, _, _ = drop
+            params = {**case.params, "from": _num(getattr(b, name)), "to": _num(getattr(w, name))}
+            runs = tuple((k, (*h[:-1], replace(h[-1], cues=b if k == "better" else w))) for k, h in case.runs)
+            return Case(runs, f"{name} worse on the last frame: {params['from']} → {params['to']}", params)
+    return case
 
 
 def _monotone_cases(subject: Subject) -> st.SearchStrategy[Case]:
@@ -468,7 +498,15 @@ def _chattering_cases(subject: Subject) -> st.SearchStrategy[Case]:
             out.append(Step(t_s=t, speed_mps=0.0, cues=c, steer_output=0.0))
         return Case.drive(out)
 
-    return steps.map(build)
+    lost = replace(fs.best_cues(rb), lane_confidence=0.0, occlusion=1.0)  # every bundled file's EMERGENCY
+
+    @st.composite
+    def enter_then_calm(draw: Any) -> Case:  # an EMERGENCY, then calm pictures: the latch must hold for hold_s
+        dt, hot, calm = draw(st.sampled_from(STEADY_DT_S)), draw(st.integers(rb.policy.enter_frames, 8)), draw(st.integers(2, 40))
+        items = [(dt, lost)] * hot + [(dt, draw(fs.calm_cues(rb, car)))] * calm
+        return replace(build(items), note=f"{hot} frames of a lost road, then {calm} calm ones, every {dt:g} s")
+
+    return st.one_of(enter_then_calm(), steps.map(build), steps.map(build))
 
 
 # -- 6. rate limits -------------------------------------------------------------------------------
@@ -821,6 +859,91 @@ def _repeat_cases(subject: Subject) -> st.SearchStrategy[Case]:
     return camera_slower_than_loop()
 
 
+# -- 11. reachable: each hazard alone reaches its response ----------------------------------------
+REACH_EXTRA_FRAMES = 2  # [frames] the hazard lasts enter_frames and this many more before the answer is judged
+CALM_LEAD_IN = 3  # [frames] calm frames before the hazard arrives
+
+
+def _promise_of(subject: Subject, spec: Any) -> Promise:
+    """The promise a run drives (a case's params), rebuilt from the rule file so a saved case replays against the file."""
+    cue, value, response = str(spec["cue"]), float(spec["value"]), Response[str(spec["response"])]
+    found = [p for p in promises(subject.rules, (cue,)) if p.value == value and p.response is response]
+    return found[0] if found else Promise(cue, value, str(spec.get("where", "given")), None, response)
+
+
+def _answers(response: Response, cmd: fg.Command, lead: bool) -> bool:
+    """Does the command answer as the promise says?"""
+    if response is Response.CAUTION:
+        return cmd.mode is not fg.Mode.NORMAL
+    if cmd.mode is not fg.Mode.EMERGENCY:
+        return False
+    if response is Response.ROAD_EMERGENCY:
+        return cmd.strategy in ((fg.Strategy.STOP, fg.Strategy.FOLLOW_LEAD) if lead else (fg.Strategy.STOP,))
+    if response is Response.COLLISION_STOP:
+        return cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
+    return cmd.strategy is fg.Strategy.CRAWL
+
+
+def check_reachable(subject: Subject, case: Case) -> str | None:
+    """Each cue the car has, alone at its worst (the others calm), reaches the response the design promises:
+    a lost or hidden road EMERGENCY (STOP, or FOLLOW_LEAD with a lead), an obstacle in the rules' imminent or near
+    range EMERGENCY STOP, darkness or glare at least CAUTION, stale localisation EMERGENCY CRAWL; half-way into
+    each worst term at least CAUTION (fuzzy/promises.py). One run per promise; the first that is not kept fails."""
+    specs = case.params["promises"]
+    for (_, history), spec in zip(case.runs, specs, strict=True):
+        promise = _promise_of(subject, spec)
+        r = run(subject, history)
+        if r.raised:
+            return _broken(r)
+        cmd, lead = r.commands[-1], history[-1].lead is not None
+        if _answers(promise.response, cmd, lead):
+            continue
+        result = subject.rules.evaluate(promise.cues(subject.rules))
+        rule = rule_for(subject.rules, promise)
+        fired = f" (fired {result.activations[rule]:.2f})" if rule in result.activations else ""
+        should = f"; the rule that should have fired: {rule!r}{fired}" if rule else "; no rule of the file reads this term"
+        return (f"{promise.text()} for {len(history) - CALM_LEAD_IN} frames: fear {cmd.fear:.3f} ({cmd.fear_level.name}), "
+                f"{cmd.mode.name} {cmd.strategy.name} at {cmd.speed_limit_mps:.3g} m/s; promised {promise.response.value}"
+                f"{' (a lead ahead)' if lead else ''}{should}")
+    return None
+
+
+def _first_broken_promise(subject: Subject, case: Case) -> Case:
+    """Only the run of the first promise not kept: the counterexample shows one history, the one that matters."""
+    for run_, spec in zip(case.runs, case.params["promises"], strict=True):
+        one = Case((run_,), case.note, {"promises": [spec]})
+        if check_reachable(subject, one) is not None:
+            return Case((run_,), f"{_promise_of(subject, spec).text()}: promised {spec['response']}", {"promises": [spec]})
+    return case
+
+
+def _reachable_cases(subject: Subject) -> st.SearchStrategy[Case]:
+    rb, car = subject.rules, subject.vehicle
+    cues = tuple(n for n in CUE_NAMES if n != "qr_staleness_s" or car.has_qr_localisation)  # QR: only a car that has it
+    chosen = promises(rb, cues)
+    dts, speeds = st.sampled_from(STEADY_DT_S), fs.speeds(car, unknown=False)
+    leads = st.one_of(st.none(), st.builds(fg.Lead, st.floats(-15.0, 15.0), st.one_of(st.none(), st.floats(5.0, 60.0))))
+    best = fs.best_cues(rb)
+
+    @st.composite
+    def drives(draw: Any) -> Case:  # every promise, each in its own run, at one frame rate, speed and lead
+        dt, v, lead = draw(dts), draw(speeds), draw(leads)
+        n = CALM_LEAD_IN + rb.policy.enter_frames + REACH_EXTRA_FRAMES
+        runs = []
+        for p in chosen:
+            hazard = p.cues(rb)
+            calm = replace(hazard, **{p.cue: getattr(best, p.cue)})
+            ahead = lead if p.response is Response.ROAD_EMERGENCY else None
+            runs.append((f"{p.cue}={p.value:g}", tuple(
+                Step(t_s=k * dt, speed_mps=v, cues=calm if k < CALM_LEAD_IN else hazard,
+                     lead=None if k < CALM_LEAD_IN else ahead, steer_output=0.0) for k in range(n))))
+        specs = [{"cue": p.cue, "value": p.value, "where": p.where, "response": p.response.name} for p in chosen]
+        return Case(tuple(runs), note=f"each of {len(chosen)} hazards alone, every {dt:g} s at {v:.3g} m/s",
+                    params={"promises": specs})
+
+    return drives()
+
+
 INVARIANTS: tuple[Invariant, ...] = (
     Invariant("1", "limits_in_range", "limits in range",
               "0 ≤ speed_limit_mps ≤ max_speed_mps; fear in [0, 1]; steering within ±max_steering_deg",
@@ -829,7 +952,7 @@ INVARIANTS: tuple[Invariant, ...] = (
               _safe_distance_cases, check_safe_distance, prefix_closed=True),
     Invariant("3", "monotone", "monotone in each cue" + (" and closing speed" if HAS_RANGE_RATE else ""),
               "a cue getting worse never lowers fear nor raises the speed limit; a faster closing speed never raises it",
-              _monotone_cases, check_monotone),
+              _monotone_cases, check_monotone, narrow=_monotone_at_drop),
     Invariant("4", "unknown_is_worst", "unknown = worst",
               "a NaN cue gives exactly the fear of that cue's worst value; no rule firing = fear 1",
               _unknown_cases, check_unknown_is_worst),
@@ -859,6 +982,9 @@ INVARIANTS: tuple[Invariant, ...] = (
               "a repeated frame within a short window is 'no new frame', not a frozen camera", _repeat_cases, check_repeated_frames,
               prefix_closed=True, pending="" if HAS_FROZEN_S else
               "repeats are judged in frames, not seconds (issue 10): a 20 Hz loop on a 5 fps camera reads as a frozen camera"),
+    Invariant("11", "reachable", "each hazard alone reaches its response",
+              "a cue alone at its worst (the others calm) reaches the mode and strategy the design promises", _reachable_cases,
+              check_reachable, narrow=_first_broken_promise),
 )
 
 

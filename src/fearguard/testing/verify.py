@@ -128,6 +128,7 @@ def find_counterexample(inv: Invariant | str, subject: Subject, examples: int = 
     except NoSuchExample:
         return Outcome(inv, tried[0])
     case = _cut(inv, subject, case) if shrink else case
+    case = inv.narrow(subject, case) if inv.narrow is not None else case
     message = inv.check(subject, case)
     return Outcome(inv, tried[1] or tried[0], Counterexample(inv, message or "(no longer fails)", case, subject))
 
@@ -174,12 +175,26 @@ def chosen(only: Sequence[str] = ()) -> list[Invariant]:
     return [inv for inv in INVARIANTS if not only or inv.key in only or inv.number in only]
 
 
+def _echo(line: str) -> None:
+    """A line on stdout at once, also into a pipe or a CI log (where print is block-buffered)."""
+    print(line, flush=True)
+
+
+TITLE_WIDTH = max(len(inv.title) for inv in INVARIANTS)  # [chars] the table's invariant column: rows print as they finish
+
+
+def table_header() -> str:
+    return f"{'#':>2}  {'invariant':<{TITLE_WIDTH}}  {'examples':>8}  result"
+
+
+def table_row(o: Outcome) -> str:
+    examples = str(o.examples) if not o.skipped else "-"
+    return f"{o.invariant.number:>2}  {o.invariant.title:<{TITLE_WIDTH}}  {examples:>8}  {o.result}"
+
+
 def table(outcomes: Sequence[Outcome]) -> str:
     """The verify table: number, invariant, examples tried, result."""
-    rows = [("#", "invariant", "examples", "result")]
-    rows += [(o.invariant.number, o.invariant.title, str(o.examples) if not o.skipped else "-", o.result) for o in outcomes]
-    w0, w1, w2 = (max(len(r[k]) for r in rows) for k in range(3))
-    return "\n".join(f"{a:>{w0}}  {b:<{w1}}  {c:>{w2}}  {d}" for a, b, c, d in rows)
+    return "\n".join([table_header(), *(table_row(o) for o in outcomes)])
 
 
 def replay_counterexample(path: str | Path, rules: fg.RuleBase | str | None = None, vehicle: Any = None,
@@ -231,7 +246,7 @@ def supervisor_invariants(rules: fg.RuleBase | str | Path | None = None, vehicle
 
 
 def verify_command(rules: str | None, vehicle: str | None, steer: str | None, examples: int, seed: int, out: str | Path,
-                   only: Sequence[str] = (), replay: str | None = None, echo: Callable[[str], None] = print) -> int:
+                   only: Sequence[str] = (), replay: str | None = None, echo: Callable[[str], None] = _echo) -> int:
     """``fearguard verify``: the table, a shrunk counterexample file per failure; 0 all hold, 1 one fails.
 
     With ``replay``: re-run a saved counterexample; 1 if it still breaks its invariant, 0 if not.
@@ -245,8 +260,8 @@ def verify_command(rules: str | None, vehicle: str | None, steer: str | None, ex
     subject = Subject.of(rules, vehicle, steer)
     echo(f"fearguard verify: rules {subject.rules.path} ({subject.rules.name!r}), vehicle {subject.vehicle_name}, "
          f"steer {subject.steer_name}, up to {examples} examples per invariant, seed {seed}")
-    outcomes = verify(subject, examples, seed, only)
-    echo(table(outcomes))
+    echo(table_header())
+    outcomes = verify(subject, examples, seed, only, on_outcome=lambda o: echo(table_row(o)))  # a row as each finishes
     failed = [o for o in outcomes if o.counterexample is not None]
     for o in failed:
         assert o.counterexample is not None

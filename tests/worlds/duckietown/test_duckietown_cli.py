@@ -15,8 +15,10 @@ def test_missing_map_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> Non
 
 
 def test_bad_numbers_are_usage_errors(capsys: pytest.CaptureFixture[str], tmp_path) -> None:
-    assert main(["duckietown", "loop_empty", "--out", str(tmp_path), "--seconds", "-1"]) == 2
-    assert "seconds must be a positive number" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exc:  # rejected while parsing, before the simulator is imported
+        main(["duckietown", "loop_empty", "--out", str(tmp_path), "--seconds", "-1"])
+    assert exc.value.code == 2
+    assert "argument --seconds: must be > 0, got -1" in capsys.readouterr().err
 
 
 @pytest.mark.skipif(importlib.util.find_spec("gym_duckietown") is not None, reason="the simulator is installed here")
