@@ -22,8 +22,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from fearguard.drive.interrupt import StopSignal, stop_on_signals
 from fearguard.errors import FearguardError
-from fearguard.interrupt import StopSignal, stop_on_signals
 from fearguard.vehicle import PRESETS
 
 if TYPE_CHECKING:
@@ -79,7 +79,7 @@ def cmd_check(args: argparse.Namespace) -> int:
 def cmd_plot(args: argparse.Namespace) -> int:
     from fearguard.fuzzy.loader import load_rules
 
-    plot_rules = _desktop("fearguard.plot", "plots").plot_rules
+    plot_rules = _desktop("fearguard.outputs.plot", "plots").plot_rules
 
     for path in plot_rules(load_rules(args.file), args.out or _new_out("rules-plot", Path(args.file or "default").stem)):
         print(path)
@@ -123,8 +123,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """Chessboard photos → camera.toml: found/missed per image, the RMS reprojection error, the intrinsics."""
-    from fearguard.calibration import CalibrationError, calibrate_chessboard, expand_image_paths, parse_pattern
     from fearguard.camera import save_camera
+    from fearguard.vision.calibration import CalibrationError, calibrate_chessboard, expand_image_paths, parse_pattern
 
     pattern = parse_pattern(args.pattern)
     paths = expand_image_paths(args.images)
@@ -211,8 +211,8 @@ class _Progress:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     """A recorded drive → log.jsonl, summary.json, timeline.png (and annotated.mp4): where and why fear rose."""
+    from fearguard.files.steer_import import resolve_steer
     from fearguard.replay.run import ReplayOptions, replay
-    from fearguard.steer_import import resolve_steer
     from fearguard.vehicle import resolve_vehicle
 
     steer, _ = resolve_steer(args.steer)
@@ -306,7 +306,7 @@ def cmd_suite(args: argparse.Namespace) -> int:
 
     Each finished run is appended to runs.jsonl at once; ``--resume`` skips the runs already there.
     """
-    from fearguard.recorder import write_json
+    from fearguard.outputs.recorder import write_json
     from fearguard.sim.loop import CONTROLLERS
     from fearguard.sim.suite import run_suite, scenario_files, suite_markdown, suite_table, suite_totals
 

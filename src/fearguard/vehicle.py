@@ -18,7 +18,7 @@ from types import MappingProxyType
 from typing import Any
 
 from fearguard.errors import FearguardError
-from fearguard.reader import Table, TomlSource, read_toml
+from fearguard.files.reader import Table, TomlSource, read_toml
 
 ROUTE_NAME = re.compile(r"[A-Za-z0-9_-]+")  # the QR payload's route name (sensors/localisation.py)
 LOCALISER_SPEED_MARGIN = 1.2  # [-] without odometer a QR fix may move at most 1.2 × max speed since the last one

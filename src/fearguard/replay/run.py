@@ -18,14 +18,14 @@ from pathlib import Path
 from typing import Any
 
 from fearguard.camera import CameraModel, load_camera
+from fearguard.drive.interrupt import StopSignal
 from fearguard.fuzzy.loader import load_rules
-from fearguard.interrupt import StopSignal
 from fearguard.observation import LeadBox, Observation
-from fearguard.recorder import CommandStats, Recorder
+from fearguard.outputs.recorder import CommandStats, Recorder
+from fearguard.outputs.report import json_value
 from fearguard.replay.read_ahead import read_ahead, usable_cores
 from fearguard.replay.sensor_log import SensorLog, load_sensor_log
 from fearguard.replay.sources import SourceError, open_source, parse_position
-from fearguard.report import json_value
 from fearguard.supervisor import FearGuard
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.lane_steering import HoughLaneSteering

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from fearguard.errors import SensorLogError, SensorLogWarning
-from fearguard.reader import loads_json
+from fearguard.files.reader import loads_json
 from fearguard.readings import reading
 
 MAX_AGE_S = 0.25  # [s] default: a reading older than this is not used for a frame (5 frames at 20 Hz)

@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 
 from fearguard.errors import SourceError
-from fearguard.reader import loads_json
+from fearguard.files.reader import loads_json
 from fearguard.readings import finite_reading, whole_number
 
 DEFAULT_FPS = 20.0  # [Hz] frame rate assumed when none is known (Donkey Car's default DRIVE_LOOP_HZ)

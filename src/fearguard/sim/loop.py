@@ -19,12 +19,12 @@ from typing import Any
 import numpy as np
 
 from fearguard.camera import CameraModel
+from fearguard.drive.interrupt import StopSignal
 from fearguard.errors import EstimatorFault
 from fearguard.fuzzy.loader import load_rules
 from fearguard.fuzzy.rulebase import RuleBase
-from fearguard.interrupt import StopSignal
 from fearguard.observation import Observation
-from fearguard.recorder import Recorder, Trace
+from fearguard.outputs.recorder import Recorder, Trace
 from fearguard.sim.baselines import BASELINES, Baseline
 from fearguard.sim.metrics import ExpectationResult, Metrics, Row, RunMetrics, check_expectations
 from fearguard.sim.scenario_values import Scenario, SteeringFault

@@ -18,15 +18,15 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fearguard.drive.interrupt import StopSignal
 from fearguard.errors import ScenarioError
-from fearguard.interrupt import StopSignal
-from fearguard.recorder import SUMMARY_NAME, write_json
-from fearguard.report import JsonlLog, read_jsonl
+from fearguard.outputs.recorder import SUMMARY_NAME, write_json
+from fearguard.outputs.report import JsonlLog, read_jsonl
+from fearguard.outputs.timeline import plot_timeline
 from fearguard.sim.loop import CONTROLLERS, RunResult, run_scenario
 from fearguard.sim.metrics import Row
 from fearguard.sim.road import Road
 from fearguard.sim.scenario import BUNDLED, Scenario, load_scenario
-from fearguard.timeline import plot_timeline
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

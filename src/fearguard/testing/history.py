@@ -35,7 +35,7 @@ import numpy as np
 import fearguard as fg
 from fearguard.cues import CUE_NAMES
 from fearguard.errors import FearguardError
-from fearguard.reader import loads_json
+from fearguard.files.reader import loads_json
 
 FORMAT_VERSION = 1
 OBSERVATION_NUMBERS = ("t_s", "speed_mps", "ultrasonic_range_m", "ultrasonic_echo_s", "odometer_m", "range_rate_mps")

@@ -17,7 +17,7 @@ from typing import Any
 
 import fearguard as fg
 from fearguard.errors import FearguardError
-from fearguard.steer_import import resolve_steer
+from fearguard.files.steer_import import resolve_steer
 from fearguard.testing.frames import frame_pixels
 from fearguard.testing.history import History, SteerRaises, Step
 from fearguard.vehicle import resolve_vehicle as vehicle_by_name

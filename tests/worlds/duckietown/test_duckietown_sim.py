@@ -78,7 +78,7 @@ def test_guarded_drive_writes_the_recorder_files(tmp_path: Path) -> None:
     assert {"lane_confidence", "fear", "mode", "strategy", "lane_offset_m", "progress_m", "vel", "omega"} <= set(first)
     assert json.loads((tmp_path / "summary.json").read_text())["controller"] == "guarded"
     assert (tmp_path / "timeline.png").stat().st_size > 0 and (tmp_path / "drive.png").stat().st_size > 0
-    (video,) = tmp_path.glob("annotated.*")  # .mp4 (H.264) with PyAV, else .avi (MJPG): see fearguard.video
+    (video,) = tmp_path.glob("annotated.*")  # .mp4 (H.264) with PyAV, else .avi (MJPG): see fearguard.outputs.video
     assert video.stat().st_size > 0
     assert s["timing"]["controller_ms_median"] > 0 and not s["invalid_pose"]
 

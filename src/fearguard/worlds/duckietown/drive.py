@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from fearguard.fuzzy.loader import bundled_rules_path, load_rules
-from fearguard.recorder import Recorder
-from fearguard.report import json_value, read_jsonl
+from fearguard.outputs.recorder import Recorder
+from fearguard.outputs.report import json_value, read_jsonl
 from fearguard.sim.loop import _unsupervised_steering
 from fearguard.supervisor import Command, FearGuard, Observation
 from fearguard.vision.lane_steering import HoughLaneSteering

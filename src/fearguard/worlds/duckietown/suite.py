@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from fearguard.report import json_value
+from fearguard.outputs.report import json_value
 from fearguard.worlds.duckietown.drive import DriveOptions, drive
 from fearguard.worlds.duckietown.report import suite_markdown
 

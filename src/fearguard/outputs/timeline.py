@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from fearguard.cues import CUE_NAMES
-from fearguard.report import MODE_ORDER
+from fearguard.outputs.report import MODE_ORDER
 from fearguard.supervisor import Command
 
 if TYPE_CHECKING:

@@ -4,7 +4,7 @@ A driver is anything that produces frames and asks the supervisor: ``fearguard r
 the built-in closed loop (``sim/loop.py``), or a third-party world such as gym-duckietown. Each uses
 only this API::
 
-    from fearguard.recorder import Recorder
+    from fearguard.outputs.recorder import Recorder
 
     with Recorder(out_dir, fps=20.0, video=True) as rec:         # opens log.jsonl now, the video on frame 1
         for k, obs in enumerate(world):
@@ -12,7 +12,7 @@ only this API::
             rec.frame(k, obs.t_s, cmd, image=obs.frame_bgr,       # image: only needed with video=True
                       analysis=None, caption=f"v {v:.2f} m/s",    # what the overlay draws (lanes, lead box)
                       speed_mps=v, fields={"x_m": x})             # extra log fields (JSON values)
-            if stop:                                              # fearguard.interrupt.StopSignal
+            if stop:                                              # fearguard.drive.interrupt.StopSignal
                 break
     stats = rec.stats                                             # CommandStats: typed, built in memory
     rec.write_summary({"frames": rec.frames, **stats.to_json()})  # summary.json, written atomically
@@ -43,10 +43,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fearguard.cues import CUE_NAMES
-from fearguard.report import LEVEL_ORDER, MODE_ORDER, JsonlLog, command_record, json_value
+from fearguard.outputs.report import LEVEL_ORDER, MODE_ORDER, JsonlLog, command_record, json_value
+from fearguard.outputs.timeline import Trace, plot_timeline
+from fearguard.outputs.video import VideoSink, open_video
 from fearguard.supervisor import Command
-from fearguard.timeline import Trace, plot_timeline
-from fearguard.video import VideoSink, open_video
 
 if TYPE_CHECKING:
     from fearguard.fuzzy.rulebase import RuleBase
@@ -251,7 +251,7 @@ class Recorder:
               caption: str = "", speed_mps: float | None = None, fields: Mapping[str, Any] | None = None) -> None:
         """Record one frame: the video frame first (when recording video and given an image), then the log line."""
         if self._video is not None and image is not None:
-            from fearguard.overlay import annotate  # OpenCV drawing, only for runs with a video
+            from fearguard.outputs.overlay import annotate  # OpenCV drawing, only for runs with a video
 
             self._video.write(annotate(image, cmd, analysis, caption))
         if self._log is not None:

@@ -5,10 +5,10 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from fearguard import text_layout
+from fearguard.outputs import text_layout
+from fearguard.outputs.text_layout import TextBox, TextStyle
 from fearguard.policy import Mode
 from fearguard.supervisor import Command
-from fearguard.text_layout import TextBox, TextStyle
 from fearguard.vision.frame import FrameAnalysis
 
 MODE_COLOUR = {Mode.NORMAL: (60, 200, 60), Mode.CAUTION: (0, 190, 255), Mode.EMERGENCY: (60, 60, 255)}  # BGR

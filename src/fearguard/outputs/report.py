@@ -17,8 +17,8 @@ from typing import Any, TextIO
 
 from fearguard.cues import CUE_NAMES
 from fearguard.fear import FearLevel
+from fearguard.files.reader import loads_json
 from fearguard.policy import Mode
-from fearguard.reader import loads_json
 from fearguard.supervisor import Command
 
 MODE_ORDER = tuple(m.name for m in Mode)
