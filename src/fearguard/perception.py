@@ -120,7 +120,7 @@ class Perception:
         t = t_s if t_s is not None else _NAN
         reasons: list[str] = []  # alerts
         facts: list[str] = []
-        box = obs.lead if isinstance(obs.lead, LeadBox) else None
+        box = obs.lead_box if isinstance(obs.lead_box, LeadBox) else None
         analysis = self._vision(obs.frame, t, box, reasons, facts)
         seen = analysis if analysis is not None else _UNSEEN
         t1 = clock()

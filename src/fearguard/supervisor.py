@@ -103,6 +103,9 @@ class _State:
 class FearGuard:
     """Fuzzy affective safety supervisor around a steering function (frame → degrees, + = left).
 
+    ``steer`` may be None when every Observation brings its ``steering_deg`` (a caller that already holds the angle:
+    a Donkey pilot, an RL agent); a frame without one is then a fault.
+
     A ``FrameSteering`` (``HoughLaneSteering``) shares its frame pipeline: each frame is analysed once,
     for the cues and the steering. Its camera is the supervisor's camera; giving another one is a
     ``ValueError`` (``camera=None`` takes the steering's).
@@ -114,7 +117,7 @@ class FearGuard:
 
     def __init__(
         self,
-        steer: SteeringFunction,
+        steer: SteeringFunction | None,
         rules: RuleBase | str | None = None,
         vehicle: VehicleLimits | None = None,
         camera: CameraModel | None = None,
@@ -191,7 +194,7 @@ class FearGuard:
         """Cues from the observation (given, or measured by perception); absent sensors neutral, failed ones worst."""
         notes: list[str] = []
         perceived: Perceived | None = None
-        lead = obs.lead if isinstance(obs.lead, Lead) else None
+        lead = obs.lead if isinstance(obs.lead, Lead) else None  # a LeadBox is perception's (Observation.lead_box)
         if isinstance(obs.cues, Cues):
             raw = [getattr(obs.cues, name) for name in CUE_NAMES]
             values = obs.cues.values()
@@ -225,7 +228,12 @@ class FearGuard:
         return clamp_to_sensor(range_m, v, notes)
 
     def _steering(self, obs: Observation, perceived: Perceived | None) -> tuple[float, str]:
-        """The wrapped steering's angle: from this frame's analysis for a FrameSteering, else from the frame."""
+        """The wrapped estimator's angle: given in the observation (the caller holds it), else from this frame's analysis
+        for a FrameSteering, else the steering function on the frame — each validated the same way."""
+        if obs.steering_deg is not None:
+            return self._validated(obs.steering_deg, "the given steering_deg")
+        if self.steer is None:
+            return 0.0, "fault: no steering: give Observation.steering_deg or a steering function"
         analysis = perceived.analysis if perceived is not None else None
         if self._frame_steering is not None and analysis is not None:
             call, arg = self._frame_steering.steer_from, analysis
@@ -240,9 +248,14 @@ class FearGuard:
                 raw = call(arg)
         except Exception as exc:  # the wrapped estimator is foreign code: any failure is a fault
             return 0.0, f"fault: steering function raised {describe_exception(exc)}"
+        return self._validated(raw, "steering function returned")
+
+    def _validated(self, raw: object, what: str) -> tuple[float, str]:
+        """A finite angle within the vehicle's steering range, or a fault saying what arrived."""
         value = finite_reading(raw)
         if value is None:
-            return 0.0, f"fault: steering function returned {describe(raw)}, not a finite number"
+            says = f"{what} {describe(raw)}" if what.endswith("returned") else f"{what} is {describe(raw)}"
+            return 0.0, f"fault: {says}, not a finite number"
         limit = self.vehicle.max_steering_deg
         if abs(value) > limit:
             return 0.0, f"fault: steering {value:+.1f} deg outside ±{limit:.1f} deg"

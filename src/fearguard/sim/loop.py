@@ -37,19 +37,19 @@ CONTROLLERS = ("guarded", *BASELINES)
 
 
 class FaultyEstimator(HoughLaneSteering):
-    """The lane steering with the scenario's estimator faults applied at their times (``t_s`` set by the loop)."""
+    """The lane steering with the scenario's estimator faults applied at their times (the frame's, ``analysis.t_s``)."""
 
     def __init__(self, faults: tuple[SteeringFault, ...], camera: CameraModel | None = None, fps: float = 20.0) -> None:
         super().__init__(camera, fps)
         self.faults = faults
-        self.t_s = 0.0
 
     def steer_from(self, analysis: FrameAnalysis) -> float:
         angle = super().steer_from(analysis)
+        t_s = analysis.t_s
         for f in self.faults:
-            if f.active(self.t_s):
+            if f.active(t_s):
                 if f.kind == "raise":
-                    raise EstimatorFault(f"simulated estimator fault at t={self.t_s:.2f} s")
+                    raise EstimatorFault(f"simulated estimator fault at t={t_s:.2f} s")
                 if f.kind == "nan":
                     return math.nan
                 if f.kind == "stuck":
@@ -129,7 +129,6 @@ def run_scenario(
         with recorder:
             while not stop:
                 sens = world.sense()
-                estimator.t_s = sens.t_s
                 cmd: Command | None = None
                 analysis: FrameAnalysis | None = None
                 if baseline is None:
@@ -139,7 +138,7 @@ def run_scenario(
                     steering, target = cmd.steering_deg, min(profile.cruise_speed_mps, cmd.speed_limit_mps)
                     analysis = cmd.perceived.analysis if cmd.perceived is not None else None
                 else:
-                    steering, analysis = _unsupervised_steering(estimator, sens.frame_bgr, last_steer, profile.max_steering_deg)
+                    steering, analysis = _unsupervised_steering(estimator, sens.frame_bgr, last_steer, profile.max_steering_deg, sens.t_s)
                     target = baseline.speed_target(sens.t_s, sens.ultrasonic_range_m)
                 last_steer = steering
                 world.advance(steering, target)
@@ -171,7 +170,7 @@ def run_scenario(
 
 
 def _unsupervised_steering(
-    estimator: FaultyEstimator, frame: np.ndarray, last: float, limit: float
+    estimator: HoughLaneSteering, frame: np.ndarray, last: float, limit: float, t_s: float = math.nan,
 ) -> tuple[float, FrameAnalysis | None]:
     """What a car without a supervisor does with its estimator's answer: use it; on a fault, keep the last angle.
 
@@ -179,7 +178,7 @@ def _unsupervised_steering(
     """
     analysis = None
     try:
-        analysis = estimator.pipeline.process(frame)
+        analysis = replace(estimator.pipeline.process(frame), t_s=t_s)  # the world's clock (a fault injector reads it)
         angle = float(estimator.steer_from(analysis))
     except Exception:  # an unsupervised car has no better idea than holding the wheel
         return last, analysis

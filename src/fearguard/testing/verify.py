@@ -86,16 +86,13 @@ class Outcome:
     invariant: Invariant
     examples: int  # cases tried before the first failure (all of them when it passed)
     counterexample: Counterexample | None = None
-    skipped: str = ""
 
     @property
     def passed(self) -> bool:
-        return self.counterexample is None and not self.skipped
+        return self.counterexample is None
 
     @property
     def result(self) -> str:
-        if self.skipped:
-            return f"skipped: {self.skipped}"
         return "ok" if self.counterexample is None else f"FAILED: {self.counterexample.message}"
 
 
@@ -107,11 +104,9 @@ def search_settings(examples: int, shrink: bool = True) -> settings:
 
 
 def find_counterexample(inv: Invariant | str, subject: Subject, examples: int = DEFAULT_EXAMPLES, seed: int = 0,
-                        include_pending: bool = False, shrink: bool = True) -> Outcome:
+                        shrink: bool = True) -> Outcome:
     """Search one invariant; the shrunk counterexample if any case breaks it (``shrink=False``: the first found)."""
     inv = invariant(inv) if isinstance(inv, str) else inv
-    if inv.pending and not include_pending:
-        return Outcome(inv, 0, skipped=inv.pending)
     tried = [0, 0]  # cases checked, cases checked before the first failure
 
     def breaks(case: Case) -> bool:
@@ -188,8 +183,7 @@ def table_header() -> str:
 
 
 def table_row(o: Outcome) -> str:
-    examples = str(o.examples) if not o.skipped else "-"
-    return f"{o.invariant.number:>2}  {o.invariant.title:<{TITLE_WIDTH}}  {examples:>8}  {o.result}"
+    return f"{o.invariant.number:>2}  {o.invariant.title:<{TITLE_WIDTH}}  {o.examples:>8}  {o.result}"
 
 
 def table(outcomes: Sequence[Outcome]) -> str:
@@ -223,7 +217,7 @@ def supervisor_invariants(rules: fg.RuleBase | str | Path | None = None, vehicle
 
     ``examples`` (cases per invariant) defaults to the active hypothesis profile's ``max_examples``. A failure
     shows the shrunk history and writes it to ``counterexamples/<invariant>.jsonl`` (replay it with
-    ``fearguard verify --replay FILE``). Pending invariants are skipped with their reason.
+    ``fearguard verify --replay FILE``).
     """
     import pytest
 
@@ -236,8 +230,6 @@ def supervisor_invariants(rules: fg.RuleBase | str | Path | None = None, vehicle
             state["subject"] = Subject.of(rules, vehicle, steer)
         n = examples if examples is not None else settings.default.max_examples
         outcome = find_counterexample(invariant_key, state["subject"], n, seed)
-        if outcome.skipped:
-            pytest.skip(outcome.skipped)
         if outcome.counterexample is not None:
             path = outcome.counterexample.save(Path(counterexamples) / f"{invariant_key}.jsonl")
             pytest.fail(f"{outcome.counterexample.text()}\n(saved to {path}; replay: fearguard verify --replay {path})", pytrace=False)
@@ -269,7 +261,5 @@ def verify_command(rules: str | None, vehicle: str | None, steer: str | None, ex
         echo("")
         echo(o.counterexample.text())
         echo(f"counterexample written to {path} (replay: fearguard verify --replay {path})")
-    skipped = sum(1 for o in outcomes if o.skipped)
-    held = len(outcomes) - len(failed) - skipped
-    echo(f"{held} held, {len(failed)} failed, {skipped} skipped")
+    echo(f"{len(outcomes) - len(failed)} held, {len(failed)} failed")
     return 1 if failed else 0

@@ -67,6 +67,7 @@ class FrameAnalysis:
     obstacle: Obstacle | None = None  # anything standing in the ego lane, with its ground-plane range (vision/obstacle.py)
     ground: GroundLanes | None = None  # the bending lane in the ground plane, when the pipeline fits one (vision/ground_lanes.py)
     curves_px: tuple[np.ndarray | None, np.ndarray | None] | None = None  # its boundaries as polylines (u, v), frame pixels
+    t_s: float = _NAN  # [s] when the frame was taken (what a steering that depends on time, e.g. a fault injector, reads)
 
 
 def invalid_frame_reason(frame: object) -> str | None:
@@ -331,6 +332,7 @@ def _analyze(
         right=lanes.right, region=p.region, scale=p.scale, lead_box=seen.box, road_reference=seen.road_reference,
         reasons=reasons, timings_ms=timings, obstacle=seen.obstacle, ground=lanes.ground,
         curves_px=None if lanes.curves_px is None else tuple(c * p.scale if c is not None else None for c in lanes.curves_px),
+        t_s=t_s,
     )
 
 
