@@ -38,13 +38,13 @@ OUT_HELP = "(default: a new folder fearguard-out/%s-...-TIMESTAMP)"
 
 EXPLAIN_SETTLE_S = 10.0  # [s] explain shows the command after this long with the same cues
 EXPLAIN_RATE_HZ = 10.0  # [Hz] frame rate of that settling run
-CALM = {"lane_confidence": 0.9, "brightness": 120.0, "occlusion": 0.0, "obstacle_range_m": math.inf, "qr_staleness_s": 0.5}
 
 
-def _parse_cues(text: str) -> Cues:
-    from fearguard.cues import CUE_NAMES, Cues
+def _parse_cues(text: str, brightness_band: tuple[float, float]) -> Cues:
+    """NAME=VALUE,... over the calm picture (``cues.calm_values``: brightness in the middle of the rules' band)."""
+    from fearguard.cues import CUE_NAMES, Cues, calm_values
 
-    values = dict(CALM)
+    values = dict(zip(CUE_NAMES, calm_values(brightness_band), strict=True))
     for item in filter(None, (p.strip() for p in text.split(","))):
         name, sep, raw = item.partition("=")
         if not sep or name.strip() not in CUE_NAMES:
@@ -93,7 +93,7 @@ def cmd_explain(args: argparse.Namespace) -> int:
     from fearguard.supervisor import FearGuard
 
     rules = load_rules(args.rules)
-    cues = _parse_cues(args.cues)
+    cues = _parse_cues(args.cues, rules.brightness_band)
     result = rules.evaluate(cues)
     print("cues:  " + ", ".join(f"{n}={getattr(cues, n):g}" for n in CUE_NAMES))
     print(f"fear:  {result.fear:.3f}  level {result.level.name}  dominant cause {result.dominant_cause.value}")

@@ -43,9 +43,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fearguard.cues import CUE_NAMES
-from fearguard.outputs.report import LEVEL_ORDER, MODE_ORDER, JsonlLog, command_record, json_value
+from fearguard.fear import LEVEL_ORDER
+from fearguard.outputs.report import JsonlLog, command_record, json_value
 from fearguard.outputs.timeline import Trace, plot_timeline
 from fearguard.outputs.video import VideoSink, open_video
+from fearguard.policy import MODE_ORDER
 from fearguard.supervisor import Command
 
 if TYPE_CHECKING:

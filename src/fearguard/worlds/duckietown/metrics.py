@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from fearguard.policy import MODE_ORDER
 from fearguard.worlds.duckietown.preset import (
     WHEEL_OUTER_HALF_TRACK_M,
     WHITE_INNER_M,
@@ -29,7 +30,7 @@ from fearguard.worlds.duckietown.preset import (
     YELLOW_OUTER_M,
 )
 
-MODES = ("NORMAL", "CAUTION", "EMERGENCY")
+MODES = MODE_ORDER  # least to most cautious, as policy.Mode declares them
 STOPPED_SPEED_MPS = 0.02  # [m/s] at or below this the robot counts as standing
 RESUMED_PROGRESS_M = 0.2  # [m] driven after the obstacle was removed: the robot went on
 
