@@ -12,20 +12,23 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from fearguard.camera import CameraModel, load_camera
+from fearguard.drive.controllers import Guarded
 from fearguard.drive.interrupt import StopSignal
+from fearguard.drive.loop import run
+from fearguard.drive.world import Decision, Outcome, Sensed
 from fearguard.fuzzy.loader import load_rules
 from fearguard.observation import LeadBox, Observation
 from fearguard.outputs.recorder import CommandStats, Recorder
 from fearguard.outputs.report import json_value
 from fearguard.replay.read_ahead import read_ahead, usable_cores
 from fearguard.replay.sensor_log import SensorLog, load_sensor_log
-from fearguard.replay.sources import SourceError, open_source, parse_position
+from fearguard.replay.sources import Frame, SourceError, open_source, parse_position
 from fearguard.supervisor import FearGuard
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.lane_steering import HoughLaneSteering
@@ -87,29 +90,11 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     expected = _expected(source.expected_frames, start, stop_at, options.every)
     frames = source.iter_frames(start, stop_at, options.every)
     ahead = options.read_ahead if options.read_ahead is not None else usable_cores() > 1
-    if ahead:
-        frames = read_ahead(frames)
-    interrupted, began = False, time.perf_counter()
-    recorder = Recorder(out, fps=source.fps / options.every, video=options.video)
-    try:
-        with recorder:
-            for frame in frames:
-                obs = _observation(frame.t_s, frame.image_bgr, log_data, options.speed_mps)
-                cmd = guard.step(obs)
-                analysis = None
-                if recorder.video_path is not None:
-                    analysis = cmd.perceived.analysis if cmd.perceived is not None else None
-                recorder.frame(frame.index, frame.t_s, cmd, image=frame.image_bgr, analysis=analysis, caption=f"t {frame.t_s:.1f} s",
-                               fields=frame.log_fields)
-                if on_frame is not None:
-                    on_frame(recorder.frames, expected)
-                if stop:
-                    break
-    except KeyboardInterrupt:
-        interrupted = True
-    finally:
-        frames.close()  # the reader stops (and the source is closed) before its skips and end are summarised
-    interrupted = interrupted or bool(stop)
+    world = RecordingWorld(read_ahead(frames) if ahead else frames, source.fps / options.every, log_data, options.speed_mps)
+    began = time.perf_counter()
+    recorder = Recorder(out, fps=world.fps, video=options.video)
+    ran = run(world, Guarded(guard), recorder, stop=stop, on_frame=on_frame, total=expected)  # closing the world stops the reader
+    interrupted = ran.interrupted
     elapsed = time.perf_counter() - began
     done = recorder.frames
     stats = recorder.stats
@@ -152,6 +137,30 @@ def _check_span(path: str | Path, total: int | None, fps: float, start: int, sto
 def _expected(total: int | None, start: int, stop: int | None, every: int) -> int | None:
     end = stop if stop is not None else total
     return None if end is None else max(0, math.ceil((min(end, total or end) - start) / every))
+
+
+class RecordingWorld:
+    """A recording as a ``World``: its frames with the sensor-log rows of their times; ``act`` moves nothing (open loop:
+    the recording's motion is fixed). Closing it stops the reader and closes the source."""
+
+    def __init__(self, frames: Iterator[Frame], fps: float, log: SensorLog | None, speed_mps: float | None) -> None:
+        self.frames, self.fps, self.log, self.speed_mps = frames, fps, log, speed_mps
+        self._fields: Mapping[str, Any] = {}  # the frame's extra log fields (a tub's commands)
+
+    def sense(self) -> Sensed | None:
+        frame = next(self.frames, None)
+        if frame is None:
+            return None
+        self._fields = frame.log_fields
+        return Sensed(frame.index, frame.t_s, _observation(frame.t_s, frame.image_bgr, self.log, self.speed_mps), frame.image_bgr)
+
+    def act(self, sensed: Sensed, decision: Decision) -> Outcome:
+        return Outcome(self._fields, f"t {sensed.t_s:.1f} s")
+
+    def close(self) -> None:
+        close = getattr(self.frames, "close", None)
+        if close is not None:
+            close()
 
 
 def _observation(t_s: float, image: Any, log: SensorLog | None, speed_mps: float | None) -> Observation:
