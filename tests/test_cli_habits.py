@@ -95,7 +95,7 @@ def test_replay_counts_the_frames_its_range_selects_not_the_whole_recording(shar
 
 @pytest.mark.parametrize(("args", "says"), [
     (["--steer", "no_such_module_xyz:steer"], "SteerImportError: --steer no_such_module_xyz:steer: cannot import"),
-    (["--vehicle", "no_such_car"], "VehicleFileError: no_such_car: --vehicle: neither a preset"),
+    (["--vehicle", "no_such_car"], "VehicleFileError: no_such_car, --vehicle: neither a preset"),
 ])
 def test_replay_rejects_a_bad_steer_or_vehicle_with_exit_2(tmp_path: Path, capsys, args: list[str], says: str) -> None:
     assert main(["replay", str(tmp_path / "none.mp4"), "--out", str(tmp_path / "o"), *args]) == 2

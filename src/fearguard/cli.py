@@ -409,9 +409,9 @@ def cmd_duckietown_suite(args: argparse.Namespace) -> int:
 
     out = args.out or _new_out("duckietown-suite", f"{args.seeds}seeds")
     table = run_suite(out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds, jobs=args.jobs,
-                      on_run=print)
+                      on_run=lambda line: print(line, flush=True), resume=args.resume)
     print(table)
-    print(f"wrote {out}/suite.md, suite.json")
+    print(f"wrote {out}/runs.jsonl, suite.md, suite.json")
     return 0
 
 
@@ -624,6 +624,7 @@ def build_parser() -> argparse.ArgumentParser:
     dts.add_argument("--seeds", type=_count(0), default=10, help="domain-randomised seeds (default 10)")
     dts.add_argument("--maps", nargs="*", default=None, help="lane maps (default: loop_empty small_loop zigzag_dists straight_road)")
     dts.add_argument("--rand-seconds", type=_number(above=0.0), default=None, help="duration of each randomised drive (default: --seconds)")
+    dts.add_argument("--resume", action="store_true", help="skip the drives already in OUT/runs.jsonl (after an interruption)")
     dts.add_argument("--jobs", type=_count(1), default=1, help="drives at a time, each in its own process (default 1)")
     dts.set_defaults(func=cmd_duckietown_suite)
     return parser

@@ -49,8 +49,10 @@ from fearguard.policy.decision import (
     EmergencyChoice,
     emergency_step,
     envelope_step,
+    first_limit_mps,
     lane_step,
     limit_reason,
+    measured_speed,
     motion_reasons,
     rule_reasons,
 )
@@ -267,9 +269,7 @@ class FearGuard:
     ) -> Command:
         """Advance the state by one frame and answer: the named steps of ``policy.decision`` over this frame's facts."""
         st, v, cfg = self._state, self.vehicle, self.rules.policy
-        speed = finite_reading(obs.speed_mps)
-        speed = speed if speed is not None and speed >= 0 else None
-        speed_now = v.max_speed_mps if speed is None else speed  # unknown speed: assume the worst
+        speed, speed_now = measured_speed(obs.speed_mps, v)
         range_m = self._range_for_policy(cues)
         closing = self._closing_speed(obs, t, range_m, perceived)
         imminent = imminent_collision(range_m, speed_now, v, closing)
@@ -304,8 +304,7 @@ class FearGuard:
         reasons.extend(motion_reasons(imminent, envelope.speed_mps, range_m, speed_now, speed, closing, v))
         reasons.extend([event] if event else [])
         target = min(caps)
-        previous = st.limit_mps if st.limit_mps is not None else min(speed_now if speed is not None else 0.0, v.max_speed_mps)
-        limit = max(0.0, rate_limited_mps(previous, target, dt, cfg))
+        limit = max(0.0, rate_limited_mps(st.limit_mps if st.limit_mps is not None else first_limit_mps(speed, v), target, dt, cfg))
         st.last_t_s, st.limit_mps = t, limit
         reasons.append(limit_reason(limit, fear_limit, envelope.speed_mps, target, envelope.seen_m, lateral))
         reasons.extend(rule_reasons(result, mode, perceived.facts if perceived is not None else ()))

@@ -25,9 +25,22 @@ from fearguard.policy.config import Mode, PolicyConfig, Strategy
 from fearguard.policy.emergency import EmergencyPlan
 from fearguard.policy.lane_check import LaneCheck
 from fearguard.policy.speed import envelope_speed_mps, lead_speed_mps
+from fearguard.readings import finite_reading
 from fearguard.vehicle import VehicleLimits
 
 TOP_RULES_IN_REASONS = 3  # [-] rules quoted in a command's reasons
+
+
+def measured_speed(reading_mps: object, vehicle: VehicleLimits) -> tuple[float | None, float]:
+    """(the measured speed, None when it is no speed ≥ 0; the speed to plan with: unknown counts as the top speed)."""
+    speed = finite_reading(reading_mps)
+    speed = speed if speed is not None and speed >= 0 else None
+    return speed, vehicle.max_speed_mps if speed is None else speed
+
+
+def first_limit_mps(speed_mps: float | None, vehicle: VehicleLimits) -> float:
+    """Where the speed limit's ramp starts on the first frame: the car's measured speed (within its top speed), else 0."""
+    return min(speed_mps if speed_mps is not None else 0.0, vehicle.max_speed_mps)
 
 
 @dataclass(frozen=True)

@@ -16,16 +16,12 @@ from pathlib import Path
 from typing import Any
 
 import fearguard as fg
-from fearguard.errors import FearguardError
+from fearguard.errors import SetupError  # defined in errors.py, importable here
 from fearguard.files.steer_import import resolve_steer
 from fearguard.testing.frames import frame_pixels
 from fearguard.testing.history import History, SteerRaises, Step
 from fearguard.vehicle import resolve_vehicle as vehicle_by_name
 from fearguard.vehicle import vehicle_from_table
-
-
-class SetupError(FearguardError):
-    """A vehicle file, preset or steering function given to the kit cannot be used."""
 
 
 @dataclass(frozen=True, eq=False)
