@@ -32,6 +32,7 @@ if TYPE_CHECKING:
     from fearguard.supervisor import FearGuard
 
 FRAME_LOOPS = ("replay", "run", "suite")  # commands that finish the current frame on a signal
+MCAP_HELP = "also write run.mcap for Foxglove: the annotated image, the command, the cues and the reasons (the ros extra)"
 VIDEO_HELP = "also write the annotated video (annotated.mp4, H.264; annotated.avi, MJPG, without the video extra)"
 OUT_ROOT = Path("fearguard-out")  # where a command writes when --out is not given: OUT_ROOT/COMMAND-LABEL-YYYYmmdd-HHMMSS
 OUT_HELP = "(default: a new folder fearguard-out/%s-...-TIMESTAMP)"
@@ -211,6 +212,7 @@ class _Progress:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     """A recorded drive → log.jsonl, summary.json, timeline.png (and annotated.mp4): where and why fear rose."""
+    from fearguard.replay.bags import BagTopics
     from fearguard.replay.run import ReplayOptions, replay
     from fearguard.steer_import import resolve_steer
     from fearguard.vehicle import resolve_vehicle
@@ -220,6 +222,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
         rules=args.rules, camera=args.camera, sensor_log=args.sensor_log, strict=args.strict, no_ultrasonic=args.no_ultrasonic,
         qr_localisation=args.qr_localisation, speed_mps=args.speed_mps, fps=args.fps, start=args.from_, stop=args.to,
         every=args.every, video=args.video, plots=not args.no_plots, vehicle=resolve_vehicle(args.vehicle), steer=steer,
+        mcap=args.mcap, topics=BagTopics(args.image_topic, args.range_topic, args.speed_topic, args.qr_topic),
     )
     out = args.out or _new_out("replay", args.recording.rstrip("/\\"))
     with _Progress("replay") as progress:
@@ -265,6 +268,10 @@ def _print_replay_summary(summary: dict, out_dir: object) -> None:
     if video:
         rescaled = f", {video['rescaled_frames']} frame(s) of another size scaled to the first" if video["rescaled_frames"] else ""
         print(f"video {video['path']} ({video['frames']} frames{rescaled})")
+    if summary.get("mcap"):
+        print(f"foxglove {summary['mcap']['path']} ({summary['mcap']['frames']} frames)")
+    if summary.get("bag_topics"):
+        print("bag topics: " + ", ".join(f"{role} {topic}" for role, topic in summary["bag_topics"].items()))
 
 
 def _by(summary: dict) -> str:
@@ -280,7 +287,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     controller = "unguarded" if args.unguarded else (args.baseline or "guarded")
     out = Path(args.out) if args.out else _new_out("run", f"{scenario.name}-{controller}")
     with _Progress(scenario.name) as progress:
-        result = run_to_folder(scenario, out, args.seed, controller, args.video, progress.update, stop=args.stop)
+        result = run_to_folder(scenario, out, args.seed, controller, args.video, progress.update, stop=args.stop, mcap=args.mcap)
     m = result.metrics
     print(f"{scenario.name} ({controller}, seed {result.seed}): {result.frames} frames, {m.distance_m:.1f} m, "
           f"mean speed {m.mean_speed_mps or 0.0:.2f} m/s, collisions {m.collisions}, lane departures {m.lane_departures}, "
@@ -296,6 +303,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     print(f"wrote {out}/log.jsonl, summary.json{plots}")
     if result.video_path is not None:
         print(f"video {result.video_path}")
+    if args.mcap:
+        print(f"foxglove {out}/run.mcap")
     if result.interrupted:
         return _interrupted_exit(args.stop)
     return 0 if result.passed else 1
@@ -386,7 +395,7 @@ def cmd_duckietown(args: argparse.Namespace) -> int:
             map_name=args.map, seconds=args.seconds, controller=args.baseline or "guarded", cruise_mps=args.cruise_mps,
             obstacle=args.obstacle, ahead_m=args.ahead, remove_after_s=args.remove_after, range_sensor=args.range,
             domain_rand=args.domain_rand, seed=args.seed, width_px=args.width, height_px=args.width * 3 // 4, rules=args.rules,
-            video=args.video, plots=not args.no_plots,
+            video=args.video, plots=not args.no_plots, mcap=args.mcap,
         )
     except ValueError as exc:
         raise FearguardError(f"duckietown: {exc}") from None
@@ -397,6 +406,8 @@ def cmd_duckietown(args: argparse.Namespace) -> int:
     print(f"wrote {out}/log.jsonl, summary.json{plots}")
     if result.video_path is not None:
         print(f"video {result.video_path}")
+    if args.mcap:
+        print(f"foxglove {out}/run.mcap")
     if result.interrupted:
         print("interrupted: the log holds every step driven so far")
         return 130
@@ -563,6 +574,12 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--every", type=_count(1), default=1, help="process every N-th frame (N >= 1)")
     rp.add_argument("--video", action="store_true", help=VIDEO_HELP)
     rp.add_argument("--no-plots", action="store_true", help="skip timeline.png")
+    rp.add_argument("--mcap", action="store_true", help=MCAP_HELP)
+    for role, what in (("image", "the camera (sensor_msgs/Image or CompressedImage)"), ("range", "the range sensor (sensor_msgs/Range)"),
+                       ("speed", "the speed (nav_msgs/Odometry, geometry_msgs/TwistStamped or Twist)"),
+                       ("qr", "QR payloads (std_msgs/String)")):
+        rp.add_argument(f"--{role}-topic", default=None, help=f"a ROS bag's topic for {what} (default: the only one there is"
+                        + ("" if role == "image" else "; none: ignore it") + ")")
     rp.set_defaults(func=cmd_replay)
     run = sub.add_parser("run", help="one scenario closed loop: rendered frames → perception → supervisor → car")
     run.add_argument("scenario", help="a bundled scenario's name (e.g. night; `fearguard scenarios` lists them) or a scenario file")
@@ -572,6 +589,7 @@ def build_parser() -> argparse.ArgumentParser:
     who.add_argument("--baseline", choices=("unguarded", "crisp", "aeb"), default=None, help="a baseline speed rule instead of fearguard")
     run.add_argument("--out", type=_out_folder, default=None, help="output folder " + OUT_HELP % "run")
     run.add_argument("--video", action="store_true", help=VIDEO_HELP)
+    run.add_argument("--mcap", action="store_true", help=MCAP_HELP)
     run.set_defaults(func=cmd_run)
     suite = sub.add_parser("suite", help="every scenario guarded and with the baselines: a comparison table")
     suite.add_argument("folder", nargs="?", type=_folder, default=None, help="folder of scenario files (default: the bundled library)")
@@ -614,6 +632,7 @@ def build_parser() -> argparse.ArgumentParser:
     dt.add_argument("--width", type=_count(40), default=320, help="camera width in pixels, 4:3 (default 320; 160 is faster)")
     dt.add_argument("--rules", default=None, help="rule file (default: the bundled rules/duckiebot.toml)")
     dt.add_argument("--video", action="store_true", help=VIDEO_HELP)
+    dt.add_argument("--mcap", action="store_true", help=MCAP_HELP)
     dt.add_argument("--no-plots", action="store_true", help="skip drive.png and timeline.png")
     dt.add_argument("--list-maps", action="store_true", help="print the maps the simulator ships and exit")
     dt.set_defaults(func=cmd_duckietown)

@@ -22,9 +22,11 @@ from fearguard.fuzzy.loader import load_rules
 from fearguard.interrupt import StopSignal
 from fearguard.observation import LeadBox, Observation
 from fearguard.recorder import CommandStats, Recorder
+from fearguard.replay.bags import BagSource, BagTopics
 from fearguard.replay.read_ahead import read_ahead, usable_cores
-from fearguard.replay.sensor_log import SensorLog, load_sensor_log
-from fearguard.replay.sources import SourceError, open_source, parse_position
+from fearguard.replay.recordings import open_recording
+from fearguard.replay.sensor_log import Readings, load_sensor_log
+from fearguard.replay.sources import SourceError, parse_position
 from fearguard.report import json_value
 from fearguard.supervisor import FearGuard
 from fearguard.vehicle import VehicleLimits
@@ -51,6 +53,8 @@ class ReplayOptions:
     vehicle: VehicleLimits = field(default_factory=VehicleLimits)  # its range sensor and QR are what the recording has (below)
     steer: Callable[[Any], float] | None = None  # the wrapped steering function, frame -> degrees (None: HoughLaneSteering)
     read_ahead: bool | None = None  # decode the next frames on another core (read_ahead.py); None: when there is one
+    mcap: bool = False  # also write run.mcap for Foxglove (mcap_out.py)
+    topics: BagTopics = field(default_factory=BagTopics)  # a ROS bag's topics (replay/bags.py); None fields: picked
 
 
 @dataclass(frozen=True)
@@ -74,8 +78,8 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
         raise SourceError(str(source_path), "every", f"must be a whole number >= 1, got {options.every!r}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    source = open_source(source_path, options.fps)
-    log_data: SensorLog | None = load_sensor_log(options.sensor_log, options.strict) if options.sensor_log else None
+    source = open_recording(source_path, options.fps, options.topics)
+    log_data: Readings | None = load_sensor_log(options.sensor_log, options.strict) if options.sensor_log else source.sensors
     camera: CameraModel | None = load_camera(options.camera) if options.camera else None
     has_us = log_data is not None and not options.no_ultrasonic and bool({"ultrasonic_range_m", "echo_s"} & set(log_data.columns))
     vehicle = replace(options.vehicle, has_ultrasonic=has_us, has_qr_localisation=options.qr_localisation)
@@ -90,17 +94,17 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     if ahead:
         frames = read_ahead(frames)
     interrupted, began = False, time.perf_counter()
-    recorder = Recorder(out, fps=source.fps / options.every, video=options.video)
+    recorder = Recorder(out, fps=source.fps / options.every, video=options.video, mcap=options.mcap)
     try:
         with recorder:
             for frame in frames:
                 obs = _observation(frame.t_s, frame.image_bgr, log_data, options.speed_mps)
                 cmd = guard.step(obs)
                 analysis = None
-                if recorder.video_path is not None:
+                if recorder.annotates:
                     analysis = cmd.perceived.analysis if cmd.perceived is not None else None
                 recorder.frame(frame.index, frame.t_s, cmd, image=frame.image_bgr, analysis=analysis, caption=f"t {frame.t_s:.1f} s",
-                               fields=frame.log_fields)
+                               fields={"source_frame": frame.source_frame, **frame.log_fields}, stamp_ns=frame.stamp_ns)
                 if on_frame is not None:
                     on_frame(recorder.frames, expected)
                 if stop:
@@ -126,6 +130,10 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
         summary["stopped_by"] = stop.name
     if recorder.video_path is not None:
         summary["video"] = {"path": str(recorder.video_path), "frames": done, "rescaled_frames": recorder.video_frames_rescaled}
+    if recorder.mcap_path is not None:
+        summary["mcap"] = {"path": str(recorder.mcap_path), "frames": done}
+    if isinstance(source, BagSource):
+        summary["bag_topics"] = dict(source.topics_used)
     summary = json_value(summary)
     recorder.write_summary(summary)
     if options.plots and not stop:
@@ -154,7 +162,7 @@ def _expected(total: int | None, start: int, stop: int | None, every: int) -> in
     return None if end is None else max(0, math.ceil((min(end, total or end) - start) / every))
 
 
-def _observation(t_s: float, image: Any, log: SensorLog | None, speed_mps: float | None) -> Observation:
+def _observation(t_s: float, image: Any, log: Readings | None, speed_mps: float | None) -> Observation:
     """The Observation for one frame: the frame, and the sensor-log row valid at its time."""
     if log is None:
         return Observation(t_s, speed_mps if speed_mps is not None else math.nan, image)

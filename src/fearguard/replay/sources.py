@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from itertools import pairwise
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import cv2
 import numpy as np
@@ -31,6 +31,9 @@ import numpy as np
 from fearguard.errors import SourceError
 from fearguard.reader import loads_json
 from fearguard.readings import finite_reading, whole_number
+
+if TYPE_CHECKING:
+    from fearguard.replay.sensor_log import Readings
 
 DEFAULT_FPS = 20.0  # [Hz] frame rate assumed when none is known (Donkey Car's default DRIVE_LOOP_HZ)
 MAX_PLAUSIBLE_FPS = 1000.0  # [Hz] a container frame rate above this (or ≤ 0, NaN) is treated as missing
@@ -63,6 +66,8 @@ class Frame:
     image_bgr: np.ndarray  # uint8, H×W×3
     record: Mapping[str, Any]  # e.g. a tub's user/angle, user/throttle; an image folder's file name
     log_fields: Mapping[str, Any] = field(default_factory=lambda: _EMPTY_RECORD)  # added to the replay log (TUB_COMMANDS)
+    source_frame: int | str | None = None  # the picture in the recording: video frame, image file, tub index, bag stamp [ns]
+    stamp_ns: int | None = None  # [ns] the recording's own clock (a bag's receive time, a tub's _timestamp_ms), None: none
 
 
 @dataclass(frozen=True)
@@ -89,6 +94,7 @@ class FrameSource(ABC):
         self.skipped: list[Skip] = []
         self.stopped_early: str | None = None
         self.log_field_units: Mapping[str, str] = _EMPTY_RECORD  # units and sign of each field a Frame adds to the log
+        self.sensors: Readings | None = None  # sensor readings the recording carries itself (a bag's Range, Odometry, ...)
 
     def iter_frames(self, start: int = 0, stop: int | None = None, every: int = 1) -> Generator[Frame, None, None]:
         """Frames with start ≤ index < stop, every ``every``-th; resets ``skipped`` and ``stopped_early``."""
@@ -230,7 +236,7 @@ class VideoSource(FrameSource):
                     self._skip(index, "read but could not be converted to a BGR image")
                     continue
                 t_s = index / self.clock_fps if self.clock_fps else cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0
-                yield Frame(index, t_s, image, _EMPTY_RECORD)
+                yield Frame(index, t_s, image, _EMPTY_RECORD, source_frame=index)
         finally:
             cap.release()
 
@@ -281,7 +287,7 @@ class ImageFolderSource(FrameSource):
             if image is None:
                 self._skip(index, f"{file.name} {why}")
                 continue
-            yield Frame(index, index / self.fps, image, MappingProxyType({"file": file.name}))
+            yield Frame(index, index / self.fps, image, MappingProxyType({"file": file.name}), source_frame=file.name)
 
 
 # ---------------------------------------------------------------------------------------- Donkey tub
@@ -394,7 +400,8 @@ class TubSource(FrameSource):
                 self._skip(index, f"{image_path.relative_to(self.path)} {why} ({catalog} line {number})")
                 continue
             extra = MappingProxyType({k: v for k, v in record.items() if k not in self.image_keys})
-            yield Frame(index, (stamp - self.t0_ms) / 1000.0, image, extra, _tub_log_fields(record))
+            yield Frame(index, (stamp - self.t0_ms) / 1000.0, image, extra, _tub_log_fields(record), source_frame=index,
+                        stamp_ns=round(stamp * 1000) * 1000)  # via µs: an epoch in ns (~1.7e18) is beyond a float's 2**53
 
 
 def _tub_log_fields(record: Mapping[str, Any]) -> Mapping[str, Any]:
@@ -449,7 +456,8 @@ def _read_manifest(manifest: Path) -> tuple[list[str], list[str], dict[str, Any]
 
 
 def open_source(path: str | Path, fps: float | None = None) -> FrameSource:
-    """Open a video file, a folder of images, or a Donkey Car tub folder (detected from what is there)."""
+    """Open a video file, a folder of images, or a Donkey Car tub folder (detected from what is there); ROS bags too:
+    ``replay.recordings.open_recording``."""
     path = Path(path)
     if fps is not None and not ((finite_reading(fps) or 0.0) > 0):
         raise SourceError(path, "fps", f"must be a positive number of frames per second, got {fps!r}")

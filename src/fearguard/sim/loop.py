@@ -101,6 +101,7 @@ class RunResult:
 def run_scenario(
     scenario: Scenario, seed: int | None = None, controller: str = "guarded", out_dir: Path | None = None, *, video: bool = False,
     on_frame: Callable[[int, int], None] | None = None, stop: StopSignal | None = None, video_kind: str | None = None,
+    mcap: bool = False,
 ) -> RunResult:
     """Run one scenario closed loop; with ``out_dir``, record log.jsonl (flushed per frame) and, if asked, the video.
 
@@ -123,7 +124,7 @@ def run_scenario(
         baseline = Baseline(controller, profile.cruise_speed_mps, limits.ultrasonic_min_range_m, limits.ultrasonic_max_range_m)
     metrics = Metrics()
     total = math.ceil(scenario.duration_s / world.dt_s)
-    recorder = Recorder(out_dir, fps=scenario.camera.fps, video=video, video_kind=video_kind)
+    recorder = Recorder(out_dir, fps=scenario.camera.fps, video=video, video_kind=video_kind, mcap=mcap)
     frame_index, interrupted, last_steer = 0, False, 0.0
     try:
         with recorder:

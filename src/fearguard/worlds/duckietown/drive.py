@@ -68,6 +68,7 @@ class DriveOptions:
     start_tile: tuple[int, int] | None = None
     video: bool = False
     plots: bool = True
+    mcap: bool = False  # run.mcap for Foxglove (mcap_out.py)
 
     def __post_init__(self) -> None:
         if self.controller not in CONTROLLERS:
@@ -108,7 +109,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=camera) if o.controller == "guarded" else None
     route = world.route_m()
     obstacle_xz = world.add_obstacle(o.obstacle, o.ahead_m) if o.obstacle is not None else None
-    recorder = Recorder(out, fps=FRAME_RATE_HZ, video=o.video)
+    recorder = Recorder(out, fps=FRAME_RATE_HZ, video=o.video, mcap=o.mcap)
     total = math.ceil(o.seconds * FRAME_RATE_HZ)
     samples: list[Sample] = []
     guard_ms: list[float] = []
@@ -174,6 +175,8 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
         timing=_timing(guard_ms, sim_ms),
         camera=asdict(camera), vehicle=asdict(limits), rules=rules.name,
     )
+    if recorder.mcap_path is not None:
+        summary["mcap"] = {"path": str(recorder.mcap_path), "frames": recorder.frames}
     title = f"fearguard in Duckietown: {o.map_name}, {o.controller}" + (f", {o.obstacle} {o.ahead_m:g} m ahead" if o.obstacle else "")
     stats = recorder.stats
     summary["supervisor"] = stats.to_json() if stats.supervised_frames else None
