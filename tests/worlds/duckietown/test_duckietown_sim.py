@@ -57,6 +57,23 @@ def test_lane_offset_is_positive_to_the_right() -> None:
         w.close()
 
 
+def test_guarded_drive_writes_run_mcap_for_foxglove(tmp_path: Path) -> None:
+    """``--mcap`` (issue 37): the annotated image, the command, the cues and the reasons, one message per step, stamped
+    with the simulator's clock, read back with the mcap package's reader."""
+    from mcap.reader import make_reader
+
+    result = drive(DriveOptions("straight_road", seconds=1, width_px=160, height_px=120, plots=False, mcap=True), tmp_path)
+    assert result.summary["mcap"]["frames"] == 30
+    stamps: dict[str, list[int]] = {}
+    with (tmp_path / "run.mcap").open("rb") as fh:
+        for schema, channel, message in make_reader(fh).iter_messages(log_time_order=False):
+            stamps.setdefault(f"{channel.topic} {schema.name}", []).append(message.log_time)
+    assert set(stamps) == {"/fearguard/image foxglove.CompressedImage", "/fearguard/command fearguard.Command",
+                           "/fearguard/cues fearguard.Cues", "/fearguard/reasons foxglove.Log"}
+    for times in stamps.values():
+        assert len(times) == 30 and all(a < b for a, b in zip(times, times[1:], strict=False))
+
+
 def test_expert_keeps_the_lane(tmp_path: Path) -> None:
     s = drive(DriveOptions("straight_road", seconds=3, controller="expert", width_px=160, height_px=120, plots=False), tmp_path).summary
     assert s["departures"] == 0 and s["lane_offset_max_m"] < 0.01
