@@ -171,8 +171,24 @@ def _new_out(command: str, label: str) -> Path:
     return path
 
 
+PLAIN_STEPS_MAX = 100  # [steps] without a terminal, a line per step up to this many steps (runs, images, invariants) ...
+PLAIN_LINES = 20  # [lines] ... and for longer jobs (frames) a line every 1/20 of the job (5 %), or per PLAIN_UNKNOWN_EVERY
+PLAIN_UNKNOWN_EVERY = 500  # [steps] a line every this many steps when the total is unknown
+
+
+def plain_line_due(done: int, total: int | None) -> bool:
+    """Whether a job's progress earns a line of its own in a log (stderr no terminal): a line per step for short jobs, every
+    5 % for long ones, the last step always; step counts, not the clock, so a log reads the same on any machine."""
+    if total is None or total <= 0:
+        return done > 0 and done % PLAIN_UNKNOWN_EVERY == 0
+    if total <= PLAIN_STEPS_MAX or done >= total:
+        return done > 0
+    return done * PLAIN_LINES // total != (done - 1) * PLAIN_LINES // total
+
+
 class _Progress:
-    """A progress bar on stderr (rich's; without rich a plain line redrawn in place); quiet when stderr is no terminal."""
+    """A progress bar on stderr (rich's; without rich a plain line redrawn in place); without a terminal (a CI log, a pipe,
+    nohup) one line per step for short jobs and every 5 % for long ones (``plain_line_due``)."""
 
     def __init__(self, label: str, unit: str = "frames") -> None:
         self._label, self._unit, self._start = label, unit, time.perf_counter()
@@ -203,7 +219,12 @@ class _Progress:
     def update(self, done: int, total: int | None) -> None:
         elapsed = time.perf_counter() - self._start
         rate = f"{done / elapsed:.{0 if self._unit == 'frames' else 2}f} {self._unit}/s" if elapsed > 0 and done else ""
-        if self._bar is not None:
+        if not self._live:
+            if plain_line_due(done, total):
+                share = f" ({100 * done / total:.0f} %)" if total else ""
+                print(f"{self._label}: {done}{f'/{total}' if total else ''} {self._unit}{share} {rate}".rstrip(), file=sys.stderr,
+                      flush=True)
+        elif self._bar is not None:
             self._bar.update(self._task, completed=done, total=total, rate=rate)
         elif self._live and (self._drawn is None or elapsed - self._drawn >= 0.5 or done == total):
             self._drawn = elapsed
