@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import itertools
 import json
 import sys
 from pathlib import Path
@@ -41,7 +42,7 @@ def check_one_per_frame(topics: dict[str, list[tuple[int, dict]]], frames: int) 
     for topic, messages in topics.items():
         stamps = [t for t, _ in messages]
         assert len(messages) == frames, topic
-        assert all(a < b for a, b in zip(stamps, stamps[1:], strict=False)), f"{topic}: stamps not increasing"
+        assert all(a < b for a, b in itertools.pairwise(stamps)), f"{topic}: stamps not increasing"
         for t, body in messages:
             assert body["timestamp"] == {"sec": t // 10**9, "nsec": t % 10**9}
 

@@ -14,6 +14,8 @@ import pytest
 
 pytest.importorskip("gym_duckietown", reason="the Duckietown simulator is not installed (bash .ci/duckietown.sh)")
 
+import itertools
+
 from fearguard.vision.frame import FramePipeline
 from fearguard.worlds.duckietown import DriveOptions, drive
 from fearguard.worlds.duckietown.drive import EXPERT_LOOKAHEAD_M
@@ -71,7 +73,7 @@ def test_guarded_drive_writes_run_mcap_for_foxglove(tmp_path: Path) -> None:
     assert set(stamps) == {"/fearguard/image foxglove.CompressedImage", "/fearguard/command fearguard.Command",
                            "/fearguard/cues fearguard.Cues", "/fearguard/reasons foxglove.Log"}
     for times in stamps.values():
-        assert len(times) == 30 and all(a < b for a, b in zip(times, times[1:], strict=False))
+        assert len(times) == 30 and all(a < b for a, b in itertools.pairwise(times))
 
 
 def test_expert_keeps_the_lane(tmp_path: Path) -> None:
