@@ -23,6 +23,7 @@ from fearguard.interrupt import StopSignal
 from fearguard.observation import LeadBox, Observation
 from fearguard.recorder import CommandStats, Recorder
 from fearguard.replay.bags import BagSource, BagTopics
+from fearguard.replay.pitch import PitchCheck
 from fearguard.replay.read_ahead import read_ahead, usable_cores
 from fearguard.replay.recordings import open_recording
 from fearguard.replay.sensor_log import Readings, load_sensor_log
@@ -94,16 +95,17 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     if ahead:
         frames = read_ahead(frames)
     interrupted, began = False, time.perf_counter()
+    pitch = PitchCheck(camera)
     recorder = Recorder(out, fps=source.fps / options.every, video=options.video, mcap=options.mcap)
     try:
         with recorder:
             for frame in frames:
                 obs = _observation(frame.t_s, frame.image_bgr, log_data, options.speed_mps)
                 cmd = guard.step(obs)
-                analysis = None
-                if recorder.annotates:
-                    analysis = cmd.perceived.analysis if cmd.perceived is not None else None
-                recorder.frame(frame.index, frame.t_s, cmd, image=frame.image_bgr, analysis=analysis, caption=f"t {frame.t_s:.1f} s",
+                analysis = cmd.perceived.analysis if cmd.perceived is not None else None
+                pitch.add(frame.t_s, analysis, (frame.image_bgr.shape[1], frame.image_bgr.shape[0]))
+                recorder.frame(frame.index, frame.t_s, cmd, image=frame.image_bgr, analysis=analysis if recorder.annotates else None,
+                               caption=f"t {frame.t_s:.1f} s",
                                fields={"source_frame": frame.source_frame, **frame.log_fields}, stamp_ns=frame.stamp_ns)
                 if on_frame is not None:
                     on_frame(recorder.frames, expected)
@@ -132,6 +134,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
         summary["video"] = {"path": str(recorder.video_path), "frames": done, "rescaled_frames": recorder.video_frames_rescaled}
     if recorder.mcap_path is not None:
         summary["mcap"] = {"path": str(recorder.mcap_path), "frames": done}
+    summary["pitch_check"] = pitch.finish().to_json()
     if isinstance(source, BagSource):
         summary["bag_topics"] = dict(source.topics_used)
     summary = json_value(summary)
