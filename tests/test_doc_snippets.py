@@ -87,7 +87,8 @@ def _run(snippet: Snippet, tmp_path: Path) -> None:
     else:
         argv = ["bash", "-euo", "pipefail", "-c", snippet.code]
     done = subprocess.run(argv, cwd=clone, capture_output=True, text=True, timeout=1200, env=env, stdin=subprocess.DEVNULL)
-    assert done.returncode == 0, f"{snippet.id} failed:\n{snippet.code}\n--- stdout\n{done.stdout[-3000:]}\n--- stderr\n{done.stderr[-3000:]}"
+    output = f"--- stdout\n{done.stdout[-3000:]}\n--- stderr\n{done.stderr[-3000:]}"
+    assert done.returncode == 0, f"{snippet.id} failed:\n{snippet.code}\n{output}"
 
 
 @pytest.mark.parametrize("snippet", [s for s in SNIPPETS if s.mode in ("run", "needs")], ids=lambda s: s.id)
