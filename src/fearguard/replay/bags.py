@@ -27,10 +27,8 @@ file and the problem, never a traceback.
 from __future__ import annotations
 
 import math
-import statistics
 from collections.abc import Callable, Generator, Iterator, Mapping, Sequence
 from dataclasses import dataclass
-from itertools import pairwise
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
@@ -40,7 +38,7 @@ import numpy as np
 
 from fearguard.errors import SourceError, describe_exception
 from fearguard.replay.sensor_log import MAX_AGE_S, NO_READING, SensorLog, SensorSample
-from fearguard.replay.sources import DEFAULT_FPS, FPS_ESTIMATE_RECORDS, Frame, FrameSource, _sampled
+from fearguard.replay.sources import FPS_ESTIMATE_RECORDS, Frame, FrameSource, _sampled, estimate_fps
 
 BAG_SUFFIXES = (".bag", ".db3", ".mcap")
 INSTALL_HINT = 'reading ROS bags needs rosbags: pip install "fearguard[ros]"'
@@ -323,14 +321,8 @@ class BagSource(FrameSource):
             if image_bgr is not None:
                 size = (int(image_bgr.shape[1]), int(image_bgr.shape[0]))
                 break
-        stamps = [t for _, t, _ in first]
-        steps = [b - a for a, b in pairwise(stamps) if b > a]
-        if fps is None and steps:
-            fps = 1e9 / statistics.median(steps)
-            notes.append(f"frame rate {fps:.3g} Hz estimated from the image stamps (median interval); used by --from/--to in seconds")
-        elif fps is None:
-            fps = DEFAULT_FPS
-            notes.append(f"one image message: --from/--to in seconds assume {DEFAULT_FPS:g} Hz")
+        if fps is None:
+            fps = estimate_fps([t for _, t, _ in first], 1e9, "the image stamps", "one image message", notes)
         count = found[image].count
         super().__init__(path, fps, count, size, notes)
         self.notes = (*self.notes, *self._sensor_notes())

@@ -333,13 +333,7 @@ class TubSource(FrameSource):
                 break
         self.t0_ms = stamps[0] if stamps else 0.0  # t_s = 0 at the tub's first record (deleted or not)
         notes: list[str] = []
-        steps = [b - a for a, b in pairwise(stamps) if b > a]
-        if fps is None and steps:
-            fps = 1000.0 / statistics.median(steps)
-            notes.append(f"frame rate {fps:.3g} Hz estimated from _timestamp_ms (median interval); used by --from/--to in seconds")
-        elif fps is None:
-            fps = DEFAULT_FPS
-            notes.append(f"no usable _timestamp_ms to estimate the frame rate: --from/--to in seconds assume {DEFAULT_FPS:g} Hz")
+        fps = fps if fps is not None else estimate_fps(stamps, 1000.0, "_timestamp_ms", "no usable _timestamp_ms", notes)
         super().__init__(path, fps, expected, size, notes)
         self.log_field_units = MappingProxyType({key: meaning for channel, (key, meaning) in TUB_COMMANDS.items() if channel in inputs})
 
@@ -402,6 +396,18 @@ class TubSource(FrameSource):
             extra = MappingProxyType({k: v for k, v in record.items() if k not in self.image_keys})
             yield Frame(index, (stamp - self.t0_ms) / 1000.0, image, extra, _tub_log_fields(record), source_frame=index,
                         stamp_ns=round(stamp * 1000) * 1000)  # via µs: an epoch in ns (~1.7e18) is beyond a float's 2**53
+
+
+def estimate_fps(stamps: list[float] | list[int], units_per_s: float, source: str, without: str, notes: list[str]) -> float:
+    """A recording's frame rate from its stamps: 1 / the median increasing interval (noted, naming ``source``), or
+    DEFAULT_FPS when there is none (noted, saying ``without``); used by --from/--to in seconds."""
+    steps = [b - a for a, b in pairwise(stamps) if b > a]
+    if steps:
+        fps = units_per_s / statistics.median(steps)
+        notes.append(f"frame rate {fps:.3g} Hz estimated from {source} (median interval); used by --from/--to in seconds")
+        return fps
+    notes.append(f"{without} to estimate the frame rate: --from/--to in seconds assume {DEFAULT_FPS:g} Hz")
+    return DEFAULT_FPS
 
 
 def _tub_log_fields(record: Mapping[str, Any]) -> Mapping[str, Any]:
