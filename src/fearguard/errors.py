@@ -20,9 +20,11 @@
     └── RuntimeError
         └── EstimatorFault          a fault the simulator injects into a steering estimator (sim/loop.py)
 
-Each module that raises one imports it from here (its old import path keeps working: ``fearguard.vehicle.VehicleFileError``).
     UserWarning
-    └── SensorLogWarning            something in a sensor log is ignored, the log is still used
+    ├── SensorLogWarning            something in a sensor log is ignored, the log is still used
+    └── CameraPitchWarning          the lane lines meet away from the horizon the camera model assumes (replay/pitch.py)
+
+Each module that raises one imports it from here (its old import path keeps working: ``fearguard.vehicle.VehicleFileError``).
 
 Every file is read through ``files/reader.py`` (bounded size and nesting, strict tables), so a malformed file
 is always one of the ``FileError`` kinds above, naming the file, the line and the key.
@@ -87,6 +89,10 @@ class EstimatorFault(RuntimeError):
 
 class SensorLogWarning(UserWarning):
     """Something in a sensor log is ignored (unknown columns) but the log is still used."""
+
+
+class CameraPitchWarning(UserWarning):
+    """The lane lines' vanishing point lies more than a few degrees from the horizon the camera model assumes."""
 
 
 # -- quoting foreign values in messages --------------------------------------------------------

@@ -49,7 +49,7 @@ def broken_rules(tmp_path: Path, name: str, old: str, new: str) -> Path:
 def verify(tmp_path: Path, capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str]:
     code = main(["verify", "--out", str(tmp_path / "cx"), "--seed", "1", *args])
     out = capsys.readouterr()
-    return code, out.out + out.err
+    return code, out.err + out.out  # stderr first: its progress lines (verify: invariant N ...) before the table's last line
 
 
 def verify_as_a_user(tmp_path: Path, *args: str) -> tuple[int, str]:
@@ -57,7 +57,7 @@ def verify_as_a_user(tmp_path: Path, *args: str) -> tuple[int, str]:
     inside a test worker hypothesis' state left by earlier tests can change which cases a search tries."""
     done = subprocess.run([sys.executable, "-m", "fearguard.cli", "verify", "--out", str(tmp_path / "cx"), "--seed", "1", *args],
                           capture_output=True, text=True, env=_env(), timeout=600)
-    return done.returncode, done.stdout + done.stderr
+    return done.returncode, done.stderr + done.stdout
 
 
 INVERTED = ('"IF obstacle_range_m IS far THEN fear IS very_low"', '"IF obstacle_range_m IS far THEN fear IS very_high"')

@@ -49,7 +49,7 @@ def run(world: World, controller: Controller, recorder: Recorder, *, stop: StopS
                 outcome = world.act(sensed, decision)
                 recorder.frame(sensed.index, sensed.t_s if outcome.t_s is None else outcome.t_s, decision.command,
                                image=sensed.image, analysis=decision.analysis, caption=outcome.caption,
-                               speed_mps=outcome.speed_mps, fields=outcome.fields)
+                               speed_mps=outcome.speed_mps, fields=outcome.fields, stamp_ns=outcome.stamp_ns)
                 if on_frame is not None:
                     on_frame(recorder.frames, total)
                 if outcome.done:

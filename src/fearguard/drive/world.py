@@ -53,6 +53,7 @@ class Outcome:
     speed_mps: float | None = None  # the car's speed after the step, when the world knows it (the timeline draws it)
     done: bool = False  # the run is over (a collision, the end of the road, an invalid pose)
     t_s: float | None = None  # the log's time for this step when it is not the sensed time (a world that logs after its step)
+    stamp_ns: int | None = None  # [ns] the recording's own stamp of the frame (a bag's), for run.mcap; None: t_s
 
 
 class World(Protocol):

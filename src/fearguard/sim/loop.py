@@ -151,6 +151,7 @@ def scenario_controller(name: str, scenario: Scenario, guard: FearGuard, estimat
 def run_scenario(
     scenario: Scenario, seed: int | None = None, controller: str = "guarded", out_dir: Path | None = None, *, video: bool = False,
     on_frame: Callable[[int, int], None] | None = None, stop: StopSignal | None = None, video_kind: str | None = None,
+    mcap: bool = False,
 ) -> RunResult:
     """Run one scenario closed loop; with ``out_dir``, record log.jsonl (flushed per frame) and, if asked, the video.
 
@@ -168,7 +169,7 @@ def run_scenario(
         limits = replace(limits, ultrasonic_min_range_m=scenario.sensors.min_range_m, ultrasonic_max_range_m=scenario.sensors.max_range_m)
     guard = FearGuard(estimator, rules=load_rules(scenario.rules_path), vehicle=limits, camera=camera)
     total = math.ceil(scenario.duration_s / world.world.dt_s)
-    recorder = Recorder(out_dir, fps=scenario.camera.fps, video=video, video_kind=video_kind)
+    recorder = Recorder(out_dir, fps=scenario.camera.fps, video=video, video_kind=video_kind, mcap=mcap)
     ran = run(world, scenario_controller(controller, scenario, guard, estimator, limits), recorder, stop=stop, on_frame=on_frame,
               total=total)
     metrics = world.metrics

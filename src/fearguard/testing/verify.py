@@ -9,6 +9,7 @@ the same subject, examples and seed try the same cases (``random.Random(seed)``,
 from __future__ import annotations
 
 import random
+import sys
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -104,14 +105,17 @@ def search_settings(examples: int, shrink: bool = True) -> settings:
 
 
 def find_counterexample(inv: Invariant | str, subject: Subject, examples: int = DEFAULT_EXAMPLES, seed: int = 0,
-                        shrink: bool = True) -> Outcome:
-    """Search one invariant; the shrunk counterexample if any case breaks it (``shrink=False``: the first found)."""
+                        shrink: bool = True, on_example: Callable[[int], None] | None = None) -> Outcome:
+    """Search one invariant; the shrunk counterexample if any case breaks it (``shrink=False``: the first found).
+    ``on_example(n)`` after each case checked (progress)."""
     inv = invariant(inv) if isinstance(inv, str) else inv
     tried = [0, 0]  # cases checked, cases checked before the first failure
 
     def breaks(case: Case) -> bool:
         tried[0] += 1
         bad = inv.check(subject, case) is not None
+        if on_example is not None:
+            on_example(tried[0])
         if bad and not tried[1]:
             tried[1] = tried[0]
         return bad
@@ -149,11 +153,14 @@ def _cut(inv: Invariant, subject: Subject, case: Case) -> Case:
 
 
 def verify(subject: Subject, examples: int = DEFAULT_EXAMPLES, seed: int = 0, only: Sequence[str] = (),
-           on_outcome: Callable[[Outcome], None] | None = None) -> list[Outcome]:
-    """Search every invariant (or those in ``only``), in docs/architecture.md's order."""
+           on_outcome: Callable[[Outcome], None] | None = None,
+           on_example: Callable[[Invariant, int], None] | None = None) -> list[Outcome]:
+    """Search every invariant (or those in ``only``), in docs/architecture.md's order; ``on_example(invariant, n)`` after
+    each case checked."""
     outcomes = []
     for inv in chosen(only):
-        outcome = find_counterexample(inv, subject, examples, seed)
+        each = None if on_example is None else (lambda n, inv=inv: on_example(inv, n))
+        outcome = find_counterexample(inv, subject, examples, seed, on_example=each)
         outcomes.append(outcome)
         if on_outcome is not None:
             on_outcome(outcome)
@@ -238,7 +245,8 @@ def supervisor_invariants(rules: fg.RuleBase | str | Path | None = None, vehicle
 
 
 def verify_command(rules: str | None, vehicle: str | None, steer: str | None, examples: int, seed: int, out: str | Path,
-                   only: Sequence[str] = (), replay: str | None = None, echo: Callable[[str], None] = _echo) -> int:
+                   only: Sequence[str] = (), replay: str | None = None, echo: Callable[[str], None] = _echo,
+                   progress: Callable[[str], None] = lambda line: print(line, file=sys.stderr, flush=True)) -> int:
     """``fearguard verify``: the table, a shrunk counterexample file per failure; 0 all hold, 1 one fails.
 
     With ``replay``: re-run a saved counterexample; 1 if it still breaks its invariant, 0 if not.
@@ -253,7 +261,13 @@ def verify_command(rules: str | None, vehicle: str | None, steer: str | None, ex
     echo(f"fearguard verify: rules {subject.rules.path} ({subject.rules.name!r}), vehicle {subject.vehicle_name}, "
          f"steer {subject.steer_name}, up to {examples} examples per invariant, seed {seed}")
     echo(table_header())
-    outcomes = verify(subject, examples, seed, only, on_outcome=lambda o: echo(table_row(o)))  # a row as each finishes
+    quarter = max(1, examples // 4)
+
+    def examples_done(inv: Invariant, n: int) -> None:  # the search of one invariant can take a minute: say how far it is
+        if n % quarter == 0 and n < examples:
+            progress(f"verify: invariant {inv.number} ({inv.title}): {n}/{examples} examples")
+
+    outcomes = verify(subject, examples, seed, only, on_outcome=lambda o: echo(table_row(o)), on_example=examples_done)
     failed = [o for o in outcomes if o.counterexample is not None]
     for o in failed:
         assert o.counterexample is not None

@@ -70,6 +70,7 @@ class DriveOptions:
     start_tile: tuple[int, int] | None = None
     video: bool = False
     plots: bool = True
+    mcap: bool = False  # run.mcap for Foxglove (outputs/mcap.py)
 
     def __post_init__(self) -> None:
         if self.controller not in CONTROLLERS:
@@ -193,7 +194,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
         controller = Unguarded("unguarded", lanes, lambda _s: o.cruise_mps, limits.max_steering_deg)
     else:
         controller = Expert(world, o.cruise_mps)
-    recorder = Recorder(out, fps=FRAME_RATE_HZ, video=o.video)
+    recorder = Recorder(out, fps=FRAME_RATE_HZ, video=o.video, mcap=o.mcap)
     ran = run(drive_world, controller, recorder, on_frame=on_step, total=drive_world.total)
     summary = summarize_drive(drive_world.samples, world.dt_s)
     summary.update(route_completion(summary["progress_m"], *route))
@@ -203,6 +204,8 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
         timing=_timing(list(ran.controller_ms) if o.controller != "expert" else [], drive_world.sim_ms),
         camera=asdict(camera), vehicle=asdict(limits), rules=rules.name,
     )
+    if recorder.mcap_path is not None:
+        summary["mcap"] = {"path": str(recorder.mcap_path), "frames": recorder.frames}
     title = f"fearguard in Duckietown: {o.map_name}, {o.controller}" + (f", {o.obstacle} {o.ahead_m:g} m ahead" if o.obstacle else "")
     stats = recorder.stats
     summary["supervisor"] = stats.to_json() if stats.supervised_frames else None
