@@ -20,17 +20,48 @@ STALE = fg.Cues(0.9, 120.0, 0.0, math.inf, 25.0)
 NEAR = fg.Cues(0.9, 120.0, 0.0, 0.6, 0.5)
 
 
-def drive(guard: fg.FearGuard, cues: fg.Cues, t0: float, seconds: float, lead=None, dt: float = 0.1):
+def drive(guard: fg.FearGuard, cues: fg.Cues, t0: float, seconds: float, lead=None, dt: float = 0.1, speed: float = 0.5):
     cmds, t = [], t0
     while t < t0 + seconds - 1e-9:
-        cmds.append(guard.step(fg.Observation(t_s=round(t, 6), speed_mps=0.5, cues=cues, lead=lead)))
+        cmds.append(guard.step(fg.Observation(t_s=round(t, 6), speed_mps=speed, cues=cues, lead=lead)))
         t += dt
     return cmds
 
 
 @pytest.fixture
-def guard(rules) -> fg.FearGuard:
+def guard() -> fg.FearGuard:
+    """The model car with the mode machine as the design states it: EMERGENCY after enter_frames (the flicker grace of
+    issue 35 — a road-only emergency with the path known clear waits road_enter_s — is off here; its own tests below)."""
+    rules = fg.load_rules()
+    rules.policy = dataclasses.replace(rules.policy, road_enter_s=0.0)
     return fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=CAR)
+
+
+def test_a_flickering_road_picture_with_the_path_clear_is_caution_not_a_string_of_emergencies(rules) -> None:
+    guard = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=CAR)
+    cfg = rules.policy
+    cmds = drive(guard, CALM, 0.0, 5.0)
+    lost_s = cfg.road_enter_s - 0.1
+    for k in range(4):  # the picture lost for a little less than the grace, then trusted for 0.6 s, four times
+        start = 5.0 + (lost_s + 0.6) * k
+        cmds += drive(guard, LOST, start, lost_s) + drive(guard, CALM, start + lost_s, 0.6)
+    assert fg.Mode.EMERGENCY not in [c.mode for c in cmds]
+    doubt = [c for c in cmds if any("a flicker is not one" in r for r in c.reasons)]
+    assert doubt and all(c.mode is fg.Mode.CAUTION and c.speed_limit_mps <= cfg.road_doubt_fraction * CAR.max_speed_mps for c in doubt)
+    lasting = drive(guard, LOST, 5.0 + 4 * (lost_s + 0.6), cfg.road_enter_s + 0.5)  # lost for good: EMERGENCY once the grace is over
+    entered = next(k for k, c in enumerate(lasting) if c.mode is fg.Mode.EMERGENCY)
+    assert 0.1 * entered >= cfg.road_enter_s - 1e-9 and lasting[-1].strategy is fg.Strategy.STOP
+
+
+def test_no_grace_without_a_clear_path_or_with_the_camera_lost(rules) -> None:
+    camera_only = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=fg.VehicleLimits())  # inf: nothing known ahead
+    assert [c.mode for c in drive(camera_only, LOST, 0.0, 0.3)][-1] is fg.Mode.EMERGENCY
+    blind = dataclasses.replace(LOST, lane_confidence=math.nan, brightness=math.nan, occlusion=math.nan)
+    sensor_car = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=CAR)
+    assert [c.mode for c in drive(sensor_car, blind, 0.0, 0.3)][-1] is fg.Mode.EMERGENCY
+    for light in (2.0, 250.0):  # black or blinding: the brightness alone demands an emergency, no flicker to wait out
+        lit = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=CAR)
+        assert [c.mode for c in drive(lit, dataclasses.replace(LOST, brightness=light), 0.0, 0.3)][-1] is fg.Mode.EMERGENCY
 
 
 def test_calm_drive_is_normal_pass_through_and_ramps_up(guard) -> None:
@@ -287,7 +318,7 @@ def test_a_fault_latches_stop_until_emergency_is_left(rules) -> None:
 
 
 def test_emergency_remembers_why_it_braked_for_hold_s(guard) -> None:
-    drive(guard, NEAR, 0.0, 0.3)
+    drive(guard, NEAR, 0.0, 0.3, speed=0.0)  # a standing obstacle (a constant range at 0.5 m/s would be a lead as fast)
     cmds = drive(guard, STALE, 0.3, 3.0)  # obstacle gone, localisation stale: the collision STOP is kept 2 s
     strategies = [c.strategy for c in cmds]
     first_crawl = strategies.index(fg.Strategy.CRAWL)

@@ -40,5 +40,6 @@ def demo_drive(rules: RuleBase) -> Iterator[str]:
             yield (f"{t:5.1f}  {label:<36} {cmd.fear:5.2f} {cmd.fear_level.name:<9} {cmd.mode.name:<9} "
                    f"{cmd.strategy.name:<12} {cmd.speed_limit_mps:6.2f} {cmd.steering_deg:+6.1f}")
             if cmd.mode != last_mode and last_mode is not None:
-                yield "       ↳ " + "; ".join(cmd.reasons[:3])
+                events = [r for r in cmd.reasons[3:] if r.startswith(("entered EMERGENCY", "left EMERGENCY"))]
+                yield "       ↳ " + "; ".join([*cmd.reasons[:3], *events])  # the mode change itself is always shown
         last_mode = cmd.mode

@@ -65,6 +65,7 @@ class Perceived:
     analysis: FrameAnalysis | None = None  # this frame's analysis by the pipeline; None when it did not run
     lane: LaneGeometry | None = None  # the ego lane in metres on the ground (needs a camera with its mounting height)
     lane_steering_deg: float | None = None  # the frame pipeline's own steering toward the lane centre (finite), if any
+    clear_m: float = 0.0  # [m] how far ahead the path is known clear (range sensor, the camera's object search); 0: unknown
     range_estimate: RangeEstimate | None = None
     localisation: LocalisationState | None = None
     timings_ms: dict[str, float] = field(default_factory=dict)
@@ -136,7 +137,19 @@ class Perception:
                     obstacle_range_m=range_m, qr_staleness_s=staleness)
         lane, lane_steering = self._lane(analysis)
         return Perceived(cues=cues, lead=lead, alerts=tuple(reasons), facts=tuple(facts), analysis=analysis, lane=lane,
-                         lane_steering_deg=lane_steering, range_estimate=estimate, localisation=loc, timings_ms=timings)
+                         lane_steering_deg=lane_steering, clear_m=self._clear_m(range_m, analysis, obs),
+                         range_estimate=estimate, localisation=loc, timings_ms=timings)
+
+    def _clear_m(self, range_m: float, analysis: FrameAnalysis | None, obs: Observation) -> float:
+        """How far ahead the path is known clear: to the obstacle in range; with nothing in range, as far as a range
+        sensor reaches (one the car declares, or whose reading arrived) or the camera's object search looked."""
+        if not range_m >= 0.0:
+            return 0.0  # NaN: a failed reading says nothing
+        if math.isfinite(range_m):
+            return range_m
+        sensed = self.vehicle.has_ultrasonic or (self._range_noted and obs.ultrasonic_range_m is not None)
+        searched = analysis.searched_m if analysis is not None and analysis.obstacle is None else 0.0
+        return max(self.vehicle.ultrasonic_max_range_m if sensed else 0.0, searched)
 
     def _lane(self, analysis: FrameAnalysis | None) -> tuple[LaneGeometry | None, float | None]:
         """The lane as a measurement for policy: its ground geometry (camera with mounting height) and the pipeline's

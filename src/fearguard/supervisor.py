@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from fearguard.camera import CameraModel
-from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues, unknown_note, worst_filled
+from fearguard.cues import CUE_NAMES, OBSTACLE_RANGE, QR_STALENESS, Cues, calm_values, unknown_note, worst_filled
 from fearguard.errors import describe, describe_exception
 from fearguard.fear import Cause, FearLevel, FearResult
 from fearguard.fuzzy.loader import load_rules
@@ -32,10 +32,12 @@ from fearguard.policy import (
     Strategy,
     active_causes,
     closing_speed_from_ranges,
+    creep_clearance,
     emergency_plan,
     fear_speed_mps,
     imminent_collision,
     lateral_speed_mps,
+    lead_speed_mps,
     next_mode,
     next_recovery,
     oscillating,
@@ -49,6 +51,7 @@ from fearguard.policy.decision import (
     EmergencyChoice,
     emergency_step,
     envelope_step,
+    fear_range_m,
     first_limit_mps,
     lane_step,
     limit_reason,
@@ -272,25 +275,30 @@ class FearGuard:
         speed, speed_now = measured_speed(obs.speed_mps, v)
         range_m = self._range_for_policy(cues)
         closing = self._closing_speed(obs, t, range_m, perceived)
+        result, moving = self._moving_object(cues, result, range_m, speed, closing)
         imminent = imminent_collision(range_m, speed_now, v, closing)
+        clear_m = self._clear_m(cues, perceived, range_m)
         over = frozenset(c for c, f in result.cause_fears.items() if f >= cfg.emergency_enter_fear)
         over |= {Cause.COLLISION} if imminent else set()
-        st.mode, event = next_mode(st.mode, result.fear, t, at_once=imminent, cfg=cfg, cause_fears=result.cause_fears, over=over)
+        grace = self._grace_s(over, imminent, cues, clear_m, lead)
+        st.mode, event = next_mode(st.mode, result.fear, t, at_once=imminent, cfg=cfg, cause_fears=result.cause_fears, over=over,
+                                   grace_s=grace)
         dt = 0.0 if st.last_t_s is None else t - st.last_t_s
         fear_limit = fear_speed_mps(result.fear, self.rules.level_anchors, cfg, v)
         envelope = envelope_step(range_m, speed, closing, v)
         cause = self._dominant_cause(result, range_m)
-        reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {cause.value}"]
+        reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {cause.value}", *moving]
         road_calm = result.cause_fears[Cause.ROAD] < cfg.caution_fear
         lane_now = perceived.lane_steering_deg if perceived is not None else None
         check = self._lane_check(perceived, steering, speed_now) if road_calm else None
         choice = lane_step(check, st.estimator_distrusted, steering, lane_now, st.trusted_steering_deg, cfg, v)
         st.estimator_distrusted = choice.distrusted
-        wanted, caps, strategy = choice.steering_deg, [fear_limit, envelope.speed_mps, choice.cap_mps], Strategy.PASS_THROUGH
+        wanted, strategy = choice.steering_deg, Strategy.PASS_THROUGH
+        caps = [fear_limit, envelope.speed_mps, choice.cap_mps, self._grace_cap(grace, t, reasons)]
         mode = Mode.CAUTION if choice.caution and st.mode.mode is Mode.NORMAL else st.mode.mode
         reasons.extend([choice.reason] if choice.reason else [])
         if st.mode.mode is Mode.EMERGENCY:
-            plan = self._emergency(result, range_m, lead, imminent, cues, perceived, t, dt, speed_now, wanted)
+            plan = self._emergency(result, lead, imminent, clear_m, cues, perceived, t, dt, speed_now, wanted, steering)
             strategy, cause, wanted = plan.strategy, plan.cause or cause, plan.steering_deg
             caps.append(plan.cap_mps)
             reasons.extend(plan.reasons)
@@ -316,25 +324,76 @@ class FearGuard:
         )
 
     def _emergency(
-        self, result: FearResult, range_m: float, lead: Lead | None, imminent: bool, cues: Cues, perceived: Perceived | None,
-        t: float, dt: float, speed_now: float, wanted: float,
+        self, result: FearResult, lead: Lead | None, imminent: bool, clear_m: float, cues: Cues, perceived: Perceived | None,
+        t: float, dt: float, speed_now: float, wanted: float, steering: float,
     ) -> EmergencyChoice:
-        """In EMERGENCY: advance the recovery (creep after a road-picture stop), then the plan of the active causes."""
-        st, cfg = self._state, self.rules.policy
+        """In EMERGENCY: advance the recovery (a creep after a road-picture stop, when the path ahead is known clear), then
+        the plan of the active causes."""
+        st, cfg, v = self._state, self.rules.policy, self.vehicle
         active = active_causes(result.cause_fears, st.mode, cfg)
-        eligible, seen = recovery_eligible(st.mode, active, range_m, lead, imminent), self._lane_seen(cues, perceived)
-        st.recovery, creep = next_recovery(st.recovery, eligible, t, dt, speed_now, cfg, seen)
-        plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, self.vehicle, creep, t)
-        status = "" if creep else recovery_status(st.recovery, eligible, cfg, t, seen)
-        return emergency_step(plan, creep, perceived.lane_steering_deg if perceived is not None else None, wanted, status)
-
-    def _lane_seen(self, cues: Cues, perceived: Perceived | None) -> bool:
-        """Something of the lane is seen (a creep can re-acquire it), or the camera froze (only moving tells a frozen
-        camera from a still world)."""
+        road_stop = recovery_eligible(st.mode, active, lead, imminent)
+        unclear = creep_clearance(clear_m, cfg, v)
         confidence = finite_reading(cues.lane_confidence)
-        if confidence is not None and confidence >= self.rules.policy.recovery_min_confidence:
-            return True
-        return perceived is not None and any(a.startswith("camera: frozen") for a in perceived.alerts)
+        seen = confidence is not None and confidence >= cfg.recovery_min_confidence  # a lane this faint steers nothing
+        st.recovery, creep = next_recovery(st.recovery, road_stop and not unclear, t, dt, speed_now, cfg, blind=not seen)
+        plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t)
+        status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=not seen)
+        lane_now = perceived.lane_steering_deg if perceived is not None and seen else None
+        estimator = None if st.estimator_distrusted else steering
+        return emergency_step(plan, creep, lane_now, wanted, status, estimator, cfg.recovery_creep_max_deg)
+
+    def _moving_object(self, cues: Cues, result: FearResult, range_m: float, speed: float | None,
+                       closing: float | None) -> tuple[FearResult, tuple[str, ...]]:
+        """An object ahead that keeps moving (a measured range, a known speed and closing speed) is read by collision fear
+        as the standing obstacle that would demand the same braking (``decision.fear_range_m``): the rules judge that."""
+        if unknown_note("obstacle_range_m", cues.obstacle_range_m) is not None:
+            return result, ()
+        as_standing = fear_range_m(range_m, speed, closing)
+        if as_standing == range_m:
+            return result, ()
+        lead_v = lead_speed_mps(speed, closing)
+        read = f"standing at {as_standing:.2f} m" if math.isfinite(as_standing) else "nothing in range (the gap is not closing)"
+        why = (f"the object ahead at {range_m:.2f} m moves at {lead_v:.2f} m/s: collision fear reads the braking it demands, "
+               f"as {read}")
+        return self.rules.evaluate(replace(cues, obstacle_range_m=as_standing)), (why,)
+
+    def _clear_m(self, cues: Cues, perceived: Perceived | None, range_m: float) -> float:
+        """How far ahead the path is known clear: perception's answer for a frame; at cue level the range given (with
+        nothing in range: as far as a range sensor the car declares reaches; nothing known without one)."""
+        if perceived is not None:
+            return perceived.clear_m
+        if unknown_note("obstacle_range_m", cues.obstacle_range_m) is not None:
+            return 0.0
+        if math.isfinite(range_m):
+            return range_m
+        return self.vehicle.ultrasonic_max_range_m if self.vehicle.has_ultrasonic else 0.0
+
+    def _grace_s(self, over: frozenset[Cause], imminent: bool, cues: Cues, clear_m: float, lead: Lead | None) -> float:
+        """A road picture that flickers is CAUTION, not a string of emergencies: entering EMERGENCY for the road picture
+        alone waits ``road_enter_s`` when the path is known clear and the picture is measured. An unknown picture (a
+        lost camera) and one whose brightness alone demands an emergency (black, or blinding glare) are no flicker. With a
+        lead to follow there is no wait: following it is the better guide than a picture in doubt."""
+        cfg = self.rules.policy
+        measured = all(unknown_note(name, getattr(cues, name)) is None for name in ("lane_confidence", "brightness", "occlusion"))
+        following = lead is not None and lead.usable
+        if over != {Cause.ROAD} or imminent or following or not measured or creep_clearance(clear_m, cfg, self.vehicle):
+            return 0.0
+        light_alone = replace(Cues(*calm_values(self.rules.brightness_band)), brightness=cues.brightness)
+        if self.rules.evaluate(light_alone).fear >= cfg.emergency_enter_fear:
+            return 0.0
+        return cfg.road_enter_s
+
+    def _grace_cap(self, grace: float, t: float, reasons: list[str]) -> float:
+        """While a grace runs (the picture untrusted for enter_frames and more, not yet for ``road_enter_s``): CAUTION at
+        ``road_doubt_fraction`` of the top speed."""
+        st, cfg = self._state, self.rules.policy
+        if not (grace > 0.0 and st.mode.mode is not Mode.EMERGENCY and st.mode.frames_over >= cfg.enter_frames
+                and st.mode.over_since_s is not None):
+            return math.inf
+        cap = cfg.road_doubt_fraction * self.vehicle.max_speed_mps
+        reasons.append(f"road picture not trusted for {t - st.mode.over_since_s:.1f} of {grace:g} s with the path clear: "
+                       f"slowing to {cap:.2f} m/s before an emergency (a flicker is not one)")
+        return cap
 
     def _steer_out(self, wanted: float, dt: float, reasons: list[str]) -> float:
         """The steering answered: within ±max, and the smallest change from the last answer the rate limit allows."""

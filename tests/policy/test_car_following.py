@@ -40,6 +40,7 @@ def test_a_lead_at_a_constant_40_m_gap_is_followed_at_25_mps() -> None:
     assert all(c.mode is not fg.Mode.EMERGENCY for _, c in cmds)
     following = [c for t, c in cmds if t >= 18.0]
     assert min(c.speed_limit_mps for c in following) >= 23.0
+    assert all(any("collision fear reads the braking it demands" in r for r in c.reasons) for c in following)
     # the lead's speed from the ranges: 25 m/s, less what it may have braked since the estimate's mid-window (0.15 s)
     assert all(c.closing_speed_mps == pytest.approx(ROAD.lead_max_decel_mps2 * 0.15) for c in following)
 
@@ -82,9 +83,13 @@ def braking_lead(t: float, v: float | None) -> float:
 def test_no_contact_when_the_ego_obeys_the_limit(name, lead_speed, gap0, ego0, cruise) -> None:
     rows = closed_loop(lead_speed, gap0, ego0, cruise)
     assert min(gap for _, gap, *_ in rows) > 0.0, f"{name}: contact"
+    assert all(cmd.mode is not fg.Mode.EMERGENCY or cmd.cause is fg.Cause.COLLISION for *_, cmd in rows)
     if lead_speed is braking_lead:  # the steady 30 m gap at 20 m/s was followed, not stopped for
         steady = [cmd for t, gap, v, _, cmd in rows if 20.5 <= t < 23.0]
         assert steady and all(c.mode is not fg.Mode.EMERGENCY and c.speed_limit_mps >= 20.0 for c in steady)
+    if "CCRm" in name:  # a slower car ahead that keeps moving: no EMERGENCY at all, the ego settles at its speed
+        assert all(cmd.mode is not fg.Mode.EMERGENCY for *_, cmd in rows)
+        assert rows[-1][2] == pytest.approx(20 / 3.6, abs=0.3)
 
 
 def test_ranges_all_at_one_instant_give_no_closing_speed() -> None:

@@ -66,3 +66,20 @@ def test_property_every_creep_is_bounded_and_only_when_eligible(frames) -> None:
         assert rec.creeps <= CFG.recovery_max_creeps
         assert rec.total_m <= CFG.recovery_max_total_m + 1.0 * 0.5
     assert starts <= CFG.recovery_max_creeps
+
+
+@given(speed=st.floats(0.05, 2.0), dt=st.floats(0.02, 0.2), seen_every=st.integers(0, 5))
+def test_blind_metres_never_pass_the_blind_budget_by_more_than_a_frame(speed: float, dt: float, seen_every: int) -> None:
+    """Issue 35: a creep may run with nothing of the lane in sight, but its blind metres per EMERGENCY are bounded apart
+    (steering blind leaves a curve within metres); metres crept with the lane in sight do not count."""
+    rec, t = Recovery(), 0.0
+    for k in range(3000):
+        t += dt
+        blind = seen_every == 0 or k % seen_every != 0
+        moving = speed if rec.creep_since_s is not None else 0.0
+        rec, _ = next_recovery(rec, True, t, dt, moving, CFG, blind=blind)
+        assert rec.blind_m <= CFG.recovery_blind_m + speed * dt + 1e-9
+        assert rec.blind_m <= rec.total_m + 1e-9
+    if seen_every == 0:  # always blind: it ends, standing, and says why
+        assert rec.creep_since_s is None and rec.blind_m >= CFG.recovery_blind_m
+        assert "nothing of the lane in sight" in recovery_status(rec, True, CFG, t, blind=True)

@@ -11,16 +11,17 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import fearguard as fg
-from fearguard.policy import lateral_speed_mps
+from fearguard.policy import creep_needs_m, lateral_speed_mps
 
 CAR = fg.VehicleLimits.preset("model_car")
 RULES = fg.load_rules()
 CFG = RULES.policy
 CALM = fg.Cues(0.9, 120.0, 0.0, math.inf, 0.5)
 LOST = fg.Cues(0.3, 120.0, 0.9, math.inf, 0.5)  # road picture lost (markings hidden, the lane partly seen), range clear
-LOST_NEAR = fg.Cues(0.3, 120.0, 0.9, 1.2, 0.5)  # road lost with an obstacle in range
+LOST_NEAR = fg.Cues(0.3, 120.0, 0.9, 0.2, 0.5)  # road lost with an obstacle closer than a creep could stop for
+LOST_FAR = fg.Cues(0.3, 120.0, 0.9, 1.2, 0.5)  # road lost, an obstacle in range but beyond a creep's stopping distance
 LOST_UNKNOWN = fg.Cues(0.3, 120.0, 0.9, math.nan, 0.5)  # road lost, range sensor failed (worst: 0 m)
-BLIND = fg.Cues(0.1, 120.0, 0.9, math.inf, 0.5)  # nothing of the lane seen: creeping cannot re-acquire it
+BLIND = fg.Cues(0.1, 120.0, 0.9, math.inf, 0.5)  # nothing of the lane seen; the range sensor sees nothing within 3.96 m
 CREEP = "re-acquisition creep"
 
 
@@ -63,15 +64,26 @@ def test_the_road_seen_again_during_a_creep_ends_the_emergency() -> None:
     assert rows[-1][5].mode is fg.Mode.NORMAL and rows[-1][5].speed_limit_mps > 0.3
 
 
-def test_no_creep_with_an_obstacle_in_range_or_an_unknown_range_or_after_a_fault() -> None:
-    for lost in (LOST_NEAR, LOST_UNKNOWN, BLIND):
+def test_a_creep_needs_the_path_known_clear_not_the_lane_in_sight() -> None:
+    """Issue 35: where the markings end (nothing of the lane seen) a creep still runs when the path is known clear — nothing
+    within the range sensor's reach, or the obstacle in range beyond a creep's stopping distance."""
+    for lost in (BLIND, LOST_FAR):
+        rows = obey(guarded(), [(0.1, CALM, True)] * 10 + [(0.1, lost, True)] * 60)
+        creeping = [r for r in rows if any(CREEP in x for x in r[5].reasons)]
+        assert creeping and all(r[5].strategy is fg.Strategy.CRAWL for r in creeping)
+        assert any("creep steering by the estimator within ±15 deg: +2.0 deg" in x for r in creeping for x in r[5].reasons)
+
+
+def test_no_creep_with_an_obstacle_near_or_an_unknown_range_or_after_a_fault() -> None:
+    for lost in (LOST_NEAR, LOST_UNKNOWN):
         rows = obey(guarded(), [(0.1, CALM, True)] * 10 + [(0.1, lost, True)] * 200)
         assert not any(CREEP in x for r in rows for x in r[5].reasons)
     rows = obey(guarded(), [(0.1, CALM, True)] * 10 + [(0.1, LOST, False)] + [(0.1, LOST, True)] * 200)
     assert not any(CREEP in x for r in rows for x in r[5].reasons)
 
 
-frame_kinds = st.sampled_from([(CALM, True), (LOST, True), (LOST_NEAR, True), (LOST_UNKNOWN, True), (LOST, False), (BLIND, True),
+frame_kinds = st.sampled_from([(CALM, True), (LOST, True), (LOST_NEAR, True), (LOST_FAR, True), (LOST_UNKNOWN, True), (LOST, False),
+                               (BLIND, True),
                                (fg.Cues(0.9, 120.0, 0.0, 0.4, 0.5), True)])
 
 
@@ -86,10 +98,8 @@ def test_property_every_creep_is_bounded_never_with_an_obstacle_never_after_a_fa
             continue
         faulted = faulted or not ok
         creep = [x for x in cmd.reasons if CREEP in x]
-        if creep:
-            assert not faulted and math.isinf(cues.obstacle_range_m)
-            if "after" in creep[0]:  # a creep starts only while something of the lane is seen
-                assert cues.lane_confidence >= CFG.recovery_min_confidence
+        if creep:  # only with the path known clear for a creep's stop, never after a fault
+            assert not faulted and cues.obstacle_range_m >= creep_needs_m(CFG, CAR)
             assert cmd.strategy is fg.Strategy.CRAWL and cmd.speed_limit_mps <= CFG.crawl_fraction * CAR.max_speed_mps
             starts += "after" in creep[0]
             crept += v * dt

@@ -199,7 +199,7 @@ def _rule(text: str, i: int, group: str, variables: dict[str, Variable], src: To
 # -- the [policy] table: policy holds the numbers, the loader reads them -------------------------------
 _WHOLE_KEYS = ("enter_frames", "watchdog_frames", "recovery_max_creeps", "oscillation_flips")
 _POSITIVE_KEYS = ("watchdog_age_s", "recovery_creep_m", "recovery_creep_s", "recovery_max_total_m", "oscillation_deg",
-                  "lane_check_lookahead_s")
+                  "lane_check_lookahead_s", "recovery_blind_m", "recovery_creep_max_deg")
 
 
 def _fractions(t: Table, key: str) -> tuple[float, ...]:
@@ -248,6 +248,8 @@ def policy_from_table(src: TomlSource, data: object, key_path: str = "policy") -
         ("lane_check_min_deg", cfg.lane_check_min_deg >= 0.0, "must be >= 0"),
         ("lane_check_fraction", 0.0 <= cfg.lane_check_fraction <= 1.0, "must be in [0, 1]"),
         ("recovery_min_confidence", 0.0 <= cfg.recovery_min_confidence <= 1.0, "must be in [0, 1]"),
+        ("road_enter_s", cfg.road_enter_s >= 0.0, "must be >= 0"),
+        ("road_doubt_fraction", 0.0 <= cfg.road_doubt_fraction <= 1.0, "must be in [0, 1]"),
     ):
         if not ok:
             raise t.fail(key, f"{problem}, got {getattr(cfg, key)}")

@@ -22,6 +22,8 @@ from fearguard.policy.emergency import (
     EmergencyPlan,
     Recovery,
     active_causes,
+    creep_clearance,
+    creep_needs_m,
     emergency_plan,
     next_recovery,
     recovery_eligible,
@@ -48,7 +50,7 @@ from fearguard.policy.speed import (
 __all__ = [
     "CAUSE_WORDS", "CLOSING_WINDOW_S", "ENVELOPE_SHRINK", "MODE_ORDER", "STRATEGY_ORDER", "TIME_EPS_S", "EmergencyPlan", "Latch",
     "Lead", "Mode", "ModeState", "PolicyConfig", "Recovery", "Strategy", "active_causes", "closing_speed_from_ranges",
-    "emergency_plan", "envelope_speed_mps", "fear_speed_mps", "imminent_collision", "lateral_speed_mps", "lead_speed_mps",
-    "next_mode", "next_recovery", "oscillating", "rate_limited_mps", "rate_limited_steering_deg", "recovery_eligible",
-    "recovery_exhausted", "recovery_status", "stopping_distance_m", "watchdog_s",
+    "creep_clearance", "creep_needs_m", "emergency_plan", "envelope_speed_mps", "fear_speed_mps", "imminent_collision",
+    "lateral_speed_mps", "lead_speed_mps", "next_mode", "next_recovery", "oscillating", "rate_limited_mps",
+    "rate_limited_steering_deg", "recovery_eligible", "recovery_exhausted", "recovery_status", "stopping_distance_m", "watchdog_s",
 ]

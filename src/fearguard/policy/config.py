@@ -48,7 +48,11 @@ class PolicyConfig:
     recovery_max_creeps: int = 4  # [-] creeps per EMERGENCY; then the car stays stopped and says why
     recovery_max_total_m: float = 2.0  # [m] total creep distance per EMERGENCY
     standstill_mps: float = 0.05  # [m/s] at or below this the car counts as standing still
-    recovery_min_confidence: float = 0.25  # [-] lane_confidence from which the lane counts as partly seen (creep allowed)
+    recovery_min_confidence: float = 0.25  # [-] lane_confidence from which a creep steers by the lane seen now
+    recovery_blind_m: float = 0.3  # [m] creep distance with nothing of the lane in sight, per EMERGENCY
+    recovery_creep_max_deg: float = 15.0  # [deg] a creep steered by the wrapped estimator stays within ± this
+    road_enter_s: float = 0.5  # [s] a road-picture-only emergency with the path known clear waits this long, in CAUTION
+    road_doubt_fraction: float = 0.4  # [-] of max speed while it waits (a flickering picture: slow down, do not stop)
     oscillation_deg: float = 10.0  # [deg] a steering sign flip between two frames, both beyond this, is large
     oscillation_flips: int = 3  # [-] this many large sign flips in a row: the estimator oscillates (a fault)
     lane_check_lookahead_s: float = 1.0  # [s] the lane check looks this far ahead (time to line crossing)

@@ -97,17 +97,39 @@ class EmergencyChoice:
     reasons: tuple[str, ...]
 
 
-def emergency_step(plan: EmergencyPlan, creep: str, lane_now_deg: float | None, wanted_deg: float, status: str) -> EmergencyChoice:
-    """The plan's steering (else the one wanted); a creep steers closed-loop by the lane seen now; a stop says what the
-    recovery is doing (``status``)."""
+def emergency_step(plan: EmergencyPlan, creep: str, lane_now_deg: float | None, wanted_deg: float, status: str,
+                   estimator_deg: float | None = None, max_creep_deg: float = 90.0) -> EmergencyChoice:
+    """The plan's steering (else the one wanted); a creep steers closed-loop by the lane seen now, else by the wrapped
+    estimator within ±``max_creep_deg`` (``estimator_deg`` None: it is distrusted, the plan holds the last trusted
+    heading); a stop says what the recovery is doing (``status``)."""
     steering = plan.steering_deg if plan.steering_deg is not None else wanted_deg
     reasons = [f"EMERGENCY {plan.strategy.name}: {plan.why}"]
     if creep and lane_now_deg is not None:
         steering = lane_now_deg
         reasons.append(f"creep steering by the lane geometry seen now: {lane_now_deg:+.1f} deg")
+    elif creep and estimator_deg is not None:
+        steering = max(-max_creep_deg, min(max_creep_deg, estimator_deg))
+        reasons.append(f"creep steering by the estimator within ±{max_creep_deg:g} deg: {steering:+.1f} deg")
     if not creep and status and plan.strategy is Strategy.STOP:
         reasons.append(status)
     return EmergencyChoice(plan.strategy, plan.cause, plan.cap_mps, steering, tuple(reasons))
+
+
+def fear_range_m(range_m: float, speed_mps: float | None, closing_mps: float | None) -> float:
+    """The range collision fear reads. A standing obstacle at D demands v²/(2D) of braking from the ego's speed v; an
+    object ahead that keeps moving demands c²/(2d) at its range d and closing speed c — the braking a standing obstacle
+    at d·(v/c)² would demand. So a moving object counts as standing that far (an opening or steady gap: nothing ahead);
+    a car closing on a slower one is braked to its speed by the envelope (which still allows for the lead's hardest
+    braking), not stopped by fear. Unknown speed or closing speed: the range as it is (standing: the worst). Faster
+    closing reads nearer, never farther."""
+    if not math.isfinite(range_m) or speed_mps is None or closing_mps is None or not math.isfinite(closing_mps) or speed_mps <= 0.0:
+        return range_m
+    if closing_mps >= speed_mps:
+        return range_m  # the object stands (or comes toward the car)
+    if closing_mps <= 0.0:
+        return math.inf  # a steady or opening gap demands no braking
+    ratio = speed_mps / closing_mps
+    return range_m * ratio * ratio  # a float product overflows to inf (** raises)
 
 
 def motion_reasons(imminent: bool, envelope_mps: float, range_m: float, speed_now_mps: float, speed_mps: float | None,

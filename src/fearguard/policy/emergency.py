@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import Enum
@@ -13,6 +12,7 @@ from fearguard.fear import Cause
 from fearguard.observation import Lead
 from fearguard.policy.config import TIME_EPS_S, Mode, PolicyConfig, Strategy
 from fearguard.policy.modes import ModeState
+from fearguard.policy.speed import stopping_distance_m
 from fearguard.vehicle import VehicleLimits
 
 
@@ -116,46 +116,68 @@ class Recovery:
     still_since_s: float | None = None  # standing still (eligible) since
     creep_since_s: float | None = None  # the current creep started at (None: not creeping)
     creep_m: float = 0.0  # distance of the current creep
+    blind_m: float = 0.0  # distance crept with nothing of the lane in sight, in this EMERGENCY
 
 
-def recovery_eligible(
-    state: ModeState, active: frozenset[Cause], range_m: float, lead: Lead | None, imminent: bool,
-) -> bool:
-    """An EMERGENCY caused by the road picture alone: no fault, no collision cause, range clear, no lead to follow."""
+def recovery_eligible(state: ModeState, active: frozenset[Cause], lead: Lead | None, imminent: bool) -> bool:
+    """An EMERGENCY caused by the road picture alone: no fault, no collision cause, nothing imminent, no lead to follow.
+    (Whether a creep may run also needs the path ahead known clear: ``creep_clearance``.)"""
     return (
         state.mode is Mode.EMERGENCY and not state.fault and not imminent and Cause.ROAD in active
-        and Cause.COLLISION not in active and math.isinf(range_m) and range_m > 0 and (lead is None or not lead.usable)
+        and Cause.COLLISION not in active and (lead is None or not lead.usable)
     )
 
 
+def creep_needs_m(cfg: PolicyConfig, vehicle: VehicleLimits) -> float:
+    """How far ahead the path must be known clear for a creep: stopping from the creep speed, plus the margin."""
+    return stopping_distance_m(cfg.crawl_fraction * vehicle.max_speed_mps, vehicle) + vehicle.stop_margin_m
+
+
+def creep_clearance(clear_m: float, cfg: PolicyConfig, vehicle: VehicleLimits) -> str:
+    """Why a creep may not run on what is known of the path ahead ("" when it may): a range reading beyond the creep's
+    stopping distance, or the camera's object search finding the lane free that far, says the path is clear."""
+    need = creep_needs_m(cfg, vehicle)
+    if clear_m >= need:
+        return ""
+    if clear_m > 0.0:
+        return f"the path ahead is known clear for {clear_m:.2f} m only, a creep needs {need:.2f} m"
+    return "nothing is known about the path ahead (no range reading, no camera object search)"
+
+
 def next_recovery(
-    rec: Recovery, eligible: bool, t_s: float, dt_s: float, speed_mps: float, cfg: PolicyConfig, lane_seen: bool = True,
+    rec: Recovery, eligible: bool, t_s: float, dt_s: float, speed_mps: float, cfg: PolicyConfig, blind: bool = False,
 ) -> tuple[Recovery, str]:
     """Advance the recovery one frame; returns the new memory and, while creeping, the creep's reason (else "").
 
     After ``recovery_dwell_s`` at standstill the car creeps at most ``recovery_creep_m`` and ``recovery_creep_s``,
     at most ``recovery_max_creeps`` times and ``recovery_max_total_m`` in all; not eligible = no creep now (a creep
-    under way ends). A creep starts only while something of the lane is seen (``lane_seen``): creeping blind cannot
-    re-acquire a road that is not there; a flicker of the picture during a creep does not end it.
+    under way ends: the path stopped being known clear, an obstacle appeared). A creep needs no lane in sight — only the
+    path ahead known clear (the caller's ``eligible``): where the markings end (an intersection, a glare zone) a slow
+    creep is how the car finds them again; a flicker of the picture during a creep does not end it. But a creep with
+    nothing of the lane in sight (``blind``) steers blind, and on a curve any steering error leaves the lane within a few
+    metres: blind metres end at ``recovery_blind_m`` per EMERGENCY.
     The distance is the speed integrated over time (unknown speed counts as the top speed: the creep ends sooner).
     """
     moved = max(0.0, speed_mps) * max(dt_s, 0.0)
+    blind_m = rec.blind_m
     if rec.creep_since_s is not None:
+        blind_m += moved if blind else 0.0  # only a creep's own metres count (following a lead is no blind creep)
         creep_m, total_m = rec.creep_m + moved, rec.total_m + moved
         done = (creep_m >= cfg.recovery_creep_m or t_s - rec.creep_since_s >= cfg.recovery_creep_s - TIME_EPS_S
-                or total_m >= cfg.recovery_max_total_m)
+                or total_m >= cfg.recovery_max_total_m or (blind and blind_m >= cfg.recovery_blind_m))
         if eligible and not done:
             why = (f"re-acquisition creep {rec.creeps} of {cfg.recovery_max_creeps} "
                    f"({creep_m:.2f} of {cfg.recovery_creep_m:.2f} m, {t_s - rec.creep_since_s:.1f} of {cfg.recovery_creep_s:.1f} s)")
-            return Recovery(rec.creeps, total_m, None, rec.creep_since_s, creep_m), why
-        return Recovery(rec.creeps, total_m), ""
-    if speed_mps > cfg.standstill_mps or recovery_exhausted(rec, cfg):
-        return Recovery(rec.creeps, rec.total_m), ""
+            return Recovery(rec.creeps, total_m, None, rec.creep_since_s, creep_m, blind_m), why
+        unused = not eligible and creep_m <= 0.0  # ended before the car moved (the path stopped being known clear): no try spent
+        return Recovery(rec.creeps - 1 if unused else rec.creeps, total_m, blind_m=blind_m), ""
+    if speed_mps > cfg.standstill_mps or recovery_exhausted(rec, cfg) or (blind and blind_m >= cfg.recovery_blind_m):
+        return Recovery(rec.creeps, rec.total_m, blind_m=blind_m), ""
     still = t_s if rec.still_since_s is None else rec.still_since_s
-    if not (eligible and lane_seen) or t_s - still < cfg.recovery_dwell_s - TIME_EPS_S:
-        return Recovery(rec.creeps, rec.total_m, still), ""  # the dwell counts standing still; the creep waits
+    if not eligible or t_s - still < cfg.recovery_dwell_s - TIME_EPS_S:
+        return Recovery(rec.creeps, rec.total_m, still, blind_m=blind_m), ""  # the dwell counts standing still; the creep waits
     why = f"re-acquisition creep {rec.creeps + 1} of {cfg.recovery_max_creeps} after {t_s - still:.1f} s at standstill"
-    return Recovery(rec.creeps + 1, rec.total_m, None, t_s, 0.0), why
+    return Recovery(rec.creeps + 1, rec.total_m, None, t_s, 0.0, blind_m), why
 
 
 def recovery_exhausted(rec: Recovery, cfg: PolicyConfig) -> bool:
@@ -163,17 +185,19 @@ def recovery_exhausted(rec: Recovery, cfg: PolicyConfig) -> bool:
     return rec.creeps >= cfg.recovery_max_creeps or rec.total_m >= cfg.recovery_max_total_m
 
 
-def recovery_status(rec: Recovery, eligible: bool, cfg: PolicyConfig, t_s: float, lane_seen: bool = True) -> str:
-    """What the recovery is doing while the car is stopped by the road picture (for the reasons)."""
-    if not eligible:
+def recovery_status(rec: Recovery, road_stop: bool, cfg: PolicyConfig, t_s: float, unclear: str = "", blind: bool = False) -> str:
+    """What the recovery is doing while the car is stopped by the road picture (for the reasons); ``unclear``: why the
+    path ahead is not known clear (``creep_clearance``), when it is not."""
+    if not road_stop:
         return ""
     if recovery_exhausted(rec, cfg):
         return (f"recovery exhausted: {rec.creeps} creep(s), {rec.total_m:.2f} m crept, the road is still not seen: "
                 f"staying stopped")
-    if not lane_seen:
-        return (f"recovery: nothing of the lane seen (confidence below {cfg.recovery_min_confidence:.2f}): "
-                f"a creep cannot re-acquire it, staying stopped")
+    if unclear:
+        return f"recovery: {unclear}: a creep could not stop for what it cannot see, staying stopped"
+    if blind and rec.blind_m >= cfg.recovery_blind_m:
+        return (f"recovery: {rec.blind_m:.2f} m crept with nothing of the lane in sight (at most {cfg.recovery_blind_m:.2f} m "
+                f"blind), the lane is still not seen: staying stopped")
     if rec.still_since_s is not None:
         return f"recovery: analysing at standstill ({t_s - rec.still_since_s:.1f} of {cfg.recovery_dwell_s:.1f} s before a creep)"
     return "recovery: waiting for standstill before a creep"
-

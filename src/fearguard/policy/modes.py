@@ -6,7 +6,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from fearguard.fear import Cause
-from fearguard.policy.config import Mode, PolicyConfig
+from fearguard.policy.config import TIME_EPS_S, Mode, PolicyConfig
 
 Latch = tuple[tuple[Cause, float | None], ...]  # (cause, since when its fear is below the exit threshold)
 
@@ -21,6 +21,7 @@ class ModeState:
     below_since_s: float | None = None  # since when fear is below the exit threshold (in EMERGENCY)
     latched: Latch = ()  # causes that drove this EMERGENCY, each kept until hold_s below the exit threshold
     fault: bool = False  # a fault drove this EMERGENCY: stop until it is left
+    over_since_s: float | None = None  # since when fear is at or above the enter threshold (outside EMERGENCY)
 
 
 def _relatch(latched: Latch, over: frozenset[Cause], cause_fears: Mapping[Cause, float], t_s: float, cfg: PolicyConfig) -> Latch:
@@ -47,11 +48,14 @@ def next_mode(
     cause_fears: Mapping[Cause, float] | None = None,
     over: frozenset[Cause] = frozenset(),
     fault: bool = False,
+    grace_s: float = 0.0,
 ) -> tuple[ModeState, str]:
     """Advance the mode machine one frame; ``at_once`` (imminent collision, fault) enters immediately.
 
     ``over`` are this frame's causes that demand EMERGENCY (fear over the enter threshold, an imminent
-    collision): they are latched, so the plan remembers why it braked during the hold.
+    collision): they are latched, so the plan remembers why it braked during the hold. ``grace_s``: entering also
+    needs the fear over the threshold this long (a road picture that flickers for a second at a time with the path
+    known clear is CAUTION, not a string of emergencies; the caller decides when a grace applies).
     Returns the new state and what happened, for the reasons (empty when nothing changed).
     """
     fears = cause_fears or {}
@@ -66,11 +70,12 @@ def next_mode(
             return ModeState(mode), f"left EMERGENCY after {t_s - below:.2f} s below fear {cfg.emergency_exit_fear:.2f}"
         return ModeState(Mode.EMERGENCY, 0, state.entered_s, below, latched, faulted), ""
     frames = state.frames_over + 1 if hot else 0
-    if at_once or frames >= cfg.enter_frames:
+    since = (state.over_since_s if state.over_since_s is not None else t_s) if hot else None
+    if at_once or (frames >= cfg.enter_frames and since is not None and t_s - since >= grace_s - TIME_EPS_S):
         why = "at once" if at_once else f"after {frames} frames with fear >= {cfg.emergency_enter_fear:.2f}"
         latched = tuple((c, None) for c in Cause if c in over)
         return ModeState(Mode.EMERGENCY, frames, t_s, None, latched, fault), f"entered EMERGENCY {why}"
     mode = Mode.CAUTION if fear >= cfg.caution_fear else Mode.NORMAL
-    return ModeState(mode, frames), ""
+    return ModeState(mode, frames, over_since_s=since), ""
 
 

@@ -21,6 +21,7 @@ import fearguard as fg
 from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens
 from fearguard.fuzzy.promises import Promise, Response, promises, rule_for
 from fearguard.perception import FROZEN_S
+from fearguard.policy import creep_needs_m
 from fearguard.readings import finite_reading
 from fearguard.testing import strategies as fs
 from fearguard.testing.history import Case, FrameSpec, SteerRaises, Step
@@ -621,8 +622,10 @@ RECOVERY_WAIT_S = 30.0  # [s] standing still in a road-picture emergency: the cr
 
 
 def check_recovery_is_live(subject: Subject, case: Case) -> str | None:
-    """A road-picture emergency (range clear, no fault) at standstill is followed by a bounded creep (speed
-    limit > 0) within RECOVERY_WAIT_S; with an obstacle in range or after a fault it stays stopped."""
+    """A road-picture emergency (no fault, nothing in the way) at standstill with the path known clear — a range reading
+    beyond a creep's stopping distance, or nothing within a range sensor's reach — is followed by a bounded creep (speed
+    limit > 0) within RECOVERY_WAIT_S, even with nothing of the lane in sight; with nothing known about the path, an
+    obstacle near or after a fault it stays stopped, and a road-picture stop says why."""
     history = case.run("drive")
     r = run(subject, history)
     if r.raised:
@@ -632,9 +635,13 @@ def check_recovery_is_live(subject: Subject, case: Case) -> str | None:
         kind = "road_lost"  # the subject's own steering function answered: the scripted fault did not happen
     creeps = [i for i, c in enumerate(r.commands) if c.mode is fg.Mode.EMERGENCY and c.speed_limit_mps > 0.0]
     if kind == "road_lost" and not creeps:
-        return f"the road picture is lost, range clear, car standing: still {_cmd_text(r.commands[-1])} after {history[-1].t_s:.4g} s"
-    if kind in ("obstacle", "fault") and creeps:
+        return (f"the road picture is lost, the path known clear, car standing: still {_cmd_text(r.commands[-1])} after "
+                f"{history[-1].t_s:.4g} s")
+    if kind in ("obstacle", "fault", "unknown_path") and creeps:
         return f"frame {creeps[0]}: a creep ({_cmd_text(r.commands[creeps[0]])}) although {case.note}"
+    last = r.commands[-1]
+    if kind == "unknown_path" and not any("staying stopped" in x for x in last.reasons):
+        return f"the path ahead is unknown and the car stays stopped, but no reason says why: {last.reasons}"
     cfg = subject.rules.policy
     episodes = _runs_of(creeps)
     most, longest_s = cfg.recovery_max_creeps, cfg.recovery_creep_s
@@ -661,24 +668,30 @@ def _runs_of(indices: Sequence[int]) -> list[tuple[int, int]]:
 
 def _recovery_cases(subject: Subject) -> st.SearchStrategy[Case]:
     rb, car = subject.rules, subject.vehicle
-
+    need = creep_needs_m(rb.policy, car)
+    calm_from = max(need, fs.calm_ranges(rb)["obstacle_range_m"][0])  # clear for a creep, and far enough to be no hazard
     scripted = ["fault"] if subject.steer is None else []  # a fault can be scripted only for the scripted steering
-    kinds = st.sampled_from(["road_lost", *(["obstacle"] if car.has_ultrasonic else []), *scripted])
-    near = st.floats(car.stop_margin_m, max(car.stop_margin_m, 0.5 * car.ultrasonic_max_range_m))
+    kinds = st.sampled_from(["road_lost", "road_lost", "obstacle", *(["unknown_path"] if not car.has_ultrasonic else []), *scripted])
+    # a given range counts up to the sensor's maximum: beyond it, it reads as the maximum (issue 31)
+    far = [st.floats(calm_from, car.ultrasonic_max_range_m)] if calm_from <= car.ultrasonic_max_range_m else []
+    clear_ranges = st.one_of(*far, st.just(math.inf)) if car.has_ultrasonic else far[0] if far else st.just(math.inf)
+    if not far and not car.has_ultrasonic:  # these rules call every range this car can report a hazard: no path known clear
+        kinds = st.sampled_from(["obstacle", "unknown_path", *scripted])
+    near = st.floats(0.0, need, exclude_max=True)
 
     @st.composite
     def standstill(draw: Any) -> Case:
         kind = draw(kinds)
-        # the road picture lost while something of the lane is still seen (a creep can re-acquire it; blind, it cannot)
-        lost = replace(fs.best_cues(rb), lane_confidence=getattr(rb.policy, "recovery_min_confidence", 0.0), occlusion=1.0)
-        if kind == "obstacle":
-            lost = replace(lost, obstacle_range_m=draw(near))
+        # nothing of the lane in sight, markings hidden: the road picture alone is lost (issue 35: where the markings end)
+        lost = replace(fs.best_cues(rb), lane_confidence=draw(st.sampled_from([0.0, rb.policy.recovery_min_confidence])), occlusion=1.0)
+        rng = draw(clear_ranges) if kind in ("road_lost", "fault") else draw(near) if kind == "obstacle" else math.inf
+        lost = replace(lost, obstacle_range_m=rng)
         dt = draw(st.sampled_from(STEADY_DT_S))
         n = int(RECOVERY_WAIT_S / dt)
         steps = [Step(t_s=k * dt, speed_mps=0.0, cues=lost, steer_output=SteerRaises() if kind == "fault" and k == 0 else 0.0)
                  for k in range(n)]
-        note = {"road_lost": "the road picture is lost", "obstacle": "an obstacle is in range",
-                "fault": "the steering function faulted"}[kind]
+        note = {"road_lost": "the road picture is lost", "obstacle": "an obstacle is closer than a creep could stop for",
+                "fault": "the steering function faulted", "unknown_path": "nothing is known about the path ahead"}[kind]
         return Case.drive(steps, note=note, kind=kind, dt=dt)
 
     return standstill()
@@ -873,7 +886,8 @@ def _answers(response: Response, cmd: fg.Command, lead: bool) -> bool:
 
 
 def check_reachable(subject: Subject, case: Case) -> str | None:
-    """Each cue the car has, alone at its worst (the others calm), reaches the response the design promises:
+    """Each cue the car has, alone at its worst (the others calm), held for enter_frames and the flicker grace
+    (``road_enter_s``), reaches the response the design promises:
     a lost or hidden road EMERGENCY (STOP, or FOLLOW_LEAD with a lead), an obstacle in the rules' imminent or near
     range EMERGENCY STOP, darkness or glare at least CAUTION, stale localisation EMERGENCY CRAWL; half-way into
     each worst term at least CAUTION (fuzzy/promises.py). One run per promise; the first that is not kept fails."""
@@ -916,14 +930,15 @@ def _reachable_cases(subject: Subject) -> st.SearchStrategy[Case]:
     @st.composite
     def drives(draw: Any) -> Case:  # every promise, each in its own run, at one frame rate, speed and lead
         dt, v, lead = draw(dts), draw(speeds), draw(leads)
-        n = CALM_LEAD_IN + rb.policy.enter_frames + REACH_EXTRA_FRAMES
+        n = CALM_LEAD_IN + rb.policy.enter_frames + REACH_EXTRA_FRAMES + math.ceil(rb.policy.road_enter_s / dt)  # a flicker's grace
         runs = []
         for p in chosen:
             hazard = p.cues(rb)
             calm = replace(hazard, **{p.cue: getattr(best, p.cue)})
             ahead = lead if p.response is Response.ROAD_EMERGENCY else None
+            speed = 0.0 if p.cue == "obstacle_range_m" else v  # a standing obstacle at a range that does not change: a car at rest
             runs.append((f"{p.cue}={p.value:g}", tuple(
-                Step(t_s=k * dt, speed_mps=v, cues=calm if k < CALM_LEAD_IN else hazard,
+                Step(t_s=k * dt, speed_mps=speed, cues=calm if k < CALM_LEAD_IN else hazard,
                      lead=None if k < CALM_LEAD_IN else ahead, steer_output=0.0) for k in range(n))))
         specs = [{"cue": p.cue, "value": p.value, "where": p.where, "response": p.response.name} for p in chosen]
         return Case(tuple(runs), note=f"each of {len(chosen)} hazards alone, every {dt:g} s at {v:.3g} m/s",

@@ -48,6 +48,10 @@ SPILL_FILL = 0.75  # [-] ... (this share of the pixels there: the patch maps blu
 SPILL_SHARE = 0.5  # [-] ... and a candidate spilling out on one side on this share of its rows is the lane's edge (tape
 #   or verge the interior let in where the lane model did not see the edge line), not an object standing in the lane
 EDGE_PASSES = 3  # [-] the search looks again without such an edge at most this often (then what is left is judged as it is)
+BAND_COVER = 0.8  # [-] of the interior width: a band of foreign rows this full on most of its rows spans the lane ...
+BAND_ROWS_FULL = 0.8  # [-] ... (this share of its rows) ...
+BAND_DEPTH = 1.0  # [-] ... and no deeper on the ground than this × the interior's width there is paint across the lane (a stop
+#   line, a crossing's edge), not an object: anything standing projects far deeper onto the ground plane than it is wide
 
 
 @dataclass(frozen=True)
@@ -112,6 +116,12 @@ def detect_obstacle(
         count = foreign.sum(axis=1)
         hit = (width > 0) & (count >= np.maximum(MIN_PX, MIN_SHARE * width))
         bottom = _lowest_stretch_end(hit, MIN_ROWS)
+        for _ in range(EDGE_PASSES):  # painted bands across the lane are skipped: the search goes on beyond them
+            band_top = None if bottom is None else _painted_band(hit, count, width, bottom, rows, camera, scale)
+            if band_top is None:
+                break
+            hit[band_top : bottom + 1] = False
+            bottom = _lowest_stretch_end(hit, MIN_ROWS)
         if bottom is None:
             return None
         if interior is None or k == EDGE_PASSES:
@@ -195,6 +205,21 @@ def _edge_runs(
         if left_side == side:
             edge[i, lo - c0 : hi - c0] = True
     return edge
+
+
+def _painted_band(hit: np.ndarray, count: np.ndarray, width: np.ndarray, bottom: int, rows: np.ndarray, camera: CameraModel,
+                  scale: float) -> int | None:
+    """The first row of the stretch of object rows ending at ``bottom`` when it is paint lying across the lane (a stop line):
+    it fills the interior's width and is shallow on the ground plane. None when it may stand (or without a mounting height)."""
+    top = bottom
+    while top > 0 and hit[top - 1]:
+        top -= 1
+    full = count[top : bottom + 1] >= BAND_COVER * np.maximum(width[top : bottom + 1], 1)
+    near, far = camera.ground_range_m((rows[bottom] + 1.0) * scale), camera.ground_range_m(rows[top] * scale)
+    if near is None or far is None or not (math.isfinite(near) and math.isfinite(far)) or full.mean() < BAND_ROWS_FULL:
+        return None
+    interior_m = float(width[bottom]) * scale * near / camera.fx_px  # flat-ground width of the interior at the band
+    return top if far - near <= BAND_DEPTH * interior_m else None
 
 
 def _lowest_stretch_end(hit: np.ndarray, min_rows: int) -> int | None:
