@@ -210,3 +210,22 @@ def test_on_a_curve_the_duck_is_no_centre_line_and_the_robot_stops_once_well_sho
     assert not ob["contact"] and ob["stopped_before_contact"] and ob["went_on"]
     assert ob["min_gap_m"] >= 0.2
     assert s["collisions"] == 0 and s["departures"] == 0
+
+
+@pytest.mark.parametrize(("town", "start_m", "end_m"), [("ETH_small_intersect", 2.3, 2.6), ("TTIC_ripltown", 1.7, 1.95)])
+def test_a_red_stop_line_across_the_lane_is_paint_not_an_object(town: str, start_m: float, end_m: float) -> None:
+    """Issue 35: approaching an intersection, the red stop line across the lane was read as an object 0.21 m ahead and
+    the robot stood there for the rest of the drive. A band that fills the lane's width and lies flat is paint."""
+    w = DuckietownWorld(town, width_px=320, height_px=240, seed=0)
+    pipeline = FramePipeline(duckiebot_camera(), 30.0, ground=duckietown_lane())
+    seen, k = [], 0
+    try:
+        while w.truth().progress_m < end_m:
+            w.step(curvature_action(0.2, w.expert_curvature(EXPERT_LOOKAHEAD_M)))
+            k += 1
+            a = pipeline.process(w.frame_bgr(), t_s=k / 30.0)
+            if w.truth().progress_m >= start_m:
+                seen.append(a.obstacle)
+    finally:
+        w.close()
+    assert seen and all(o is None for o in seen), [o for o in seen if o is not None][:2]
