@@ -231,6 +231,78 @@ class _Progress:
             print(f"\r{self._label}: {done}{f'/{total}' if total else ''} {self._unit} {rate}   ", end="", file=sys.stderr, flush=True)
 
 
+class _RunProgress:
+    """Progress over the runs of a plan (suite, sweep, fleet replay, duckietown-suite): runs done of the plan, failures,
+    the time left and the workers running them; on a terminal a rich bar (or a plain line redrawn in place), without one
+    (a CI log, a pipe, nohup) a line per finished run, naming it. Resumed runs count as done; the time left is estimated
+    from the runs finished in this session."""
+
+    def __init__(self, label: str, executor: Any = None, *, line: Callable[[dict], str], failed: Callable[[dict], bool]) -> None:
+        self._label, self._executor, self._line, self._failed = label, executor, line, failed
+        self._start, self._first_done = time.perf_counter(), None
+        self._failures, self._last = 0, ""
+        self._live = sys.stderr.isatty()
+        self._bar: Any = None
+        self._task: Any = None
+        try:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
+        except ModuleNotFoundError:  # the core install has no rich: the plain line below
+            return
+        console = Console(stderr=True)
+        self._bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[failed]} failed"),
+                             TextColumn("{task.fields[workers]}"), TimeRemainingColumn(), console=console,
+                             disable=not console.is_terminal, transient=False)
+
+    def __enter__(self) -> _RunProgress:
+        if self._bar is not None:
+            self._bar.__enter__()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._bar is not None:
+            self._bar.__exit__(None, None, None)
+        elif self._live and self._first_done is not None:
+            print(file=sys.stderr)
+
+    @property
+    def workers(self) -> int:
+        """Workers running the rows: the cluster's, or 1 (this process)."""
+        return int(getattr(self._executor, "workers", 1))
+
+    def row(self, row: dict) -> None:
+        """A run finished (``run_plan``'s on_row): remember its line and whether it failed; ``update`` follows."""
+        self._failures += bool(self._failed(row))
+        self._last = self._line(row)
+
+    def update(self, done: int, total: int) -> None:
+        """``run_plan``'s on_progress: runs done (resumed ones included) of the plan's."""
+        now = time.perf_counter() - self._start
+        if self._first_done is None:
+            self._first_done = done
+        new = done - self._first_done
+        eta = f", {_duration(now / new * (total - done))} left" if new and done < total else ""
+        workers = f"{self.workers} worker{'s' if self.workers != 1 else ''}"
+        if self._bar is not None and self._live:
+            if self._task is None:
+                self._task = self._bar.add_task(self._label, total=total, completed=done, failed=0, workers=workers)
+            self._bar.update(self._task, completed=done, total=total, failed=self._failures, workers=workers)
+            return
+        text = f"{self._label}: {done}/{total} runs, {self._failures} failed, {workers}{eta}"
+        if not self._live:
+            if new or done:
+                print(text + (f": {self._last}" if new else " (resumed)"), file=sys.stderr, flush=True)
+        else:
+            print(f"\r{text}   ", end="", file=sys.stderr, flush=True)
+
+
+def _duration(seconds: float) -> str:
+    """A time left for a person: 45 s, 12 min, 2.5 h."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
+
+
 def cmd_replay(args: argparse.Namespace) -> int:
     """A recorded drive → log.jsonl, summary.json, timeline.png (and annotated.mp4): where and why fear rose."""
     from fearguard.files.steer_import import resolve_steer
@@ -338,17 +410,18 @@ def cmd_suite(args: argparse.Namespace) -> int:
     """
     from fearguard.outputs.recorder import write_json
     from fearguard.sim.loop import CONTROLLERS
-    from fearguard.sim.suite import run_suite, scenario_files, suite_markdown, suite_table, suite_totals
+    from fearguard.sim.suite import row_line, run_suite, scenario_files, suite_markdown, suite_table, suite_totals
 
     files = scenario_files(args.folder)
     if not files:
         raise FearguardError(f"suite: no *.toml scenarios in {args.folder}; give a folder of scenario files")
+    executor = _executor(args)  # before anything is written: without Dask, a one-line error
     out = Path(args.out) if args.out else _latest_suite() if args.resume else _new_out("suite", f"{args.seeds}seeds")
     out.mkdir(parents=True, exist_ok=True)
-    print(f"suite: {len(files)} scenarios × {args.seeds} seed(s) × {', '.join(CONTROLLERS)} → {out}", file=sys.stderr)
-    with _Progress("suite", unit="runs") as bar:
+    print(f"suite: {len(files)} scenarios × {args.seeds} seed(s) × {', '.join(CONTROLLERS)} → {out}{_on(executor)}", file=sys.stderr)
+    with _RunProgress("suite", executor, line=row_line, failed=lambda r: r["controller"] == "guarded" and not r["passed"]) as bar:
         progress = run_suite(files, args.seeds, on_run=print if args.verbose else None, runs_log=out / "runs.jsonl",
-                             resume=args.resume, stop=args.stop, on_progress=bar.update)
+                             resume=args.resume, stop=args.stop, on_progress=bar.update, executor=executor, on_row=bar.row)
     rows = progress.rows
     markdown = suite_markdown(rows)
     (out / "suite.md").write_text(markdown, encoding="utf-8")
@@ -366,6 +439,20 @@ def cmd_suite(args: argparse.Namespace) -> int:
         print(f"interrupted by {progress.stopped_by}: the table holds the finished runs; run the same command with --resume to go on")
         return _interrupted_exit(args.stop)
     return 0 if all(r["passed"] for r in rows if r["controller"] == "guarded") else 1
+
+
+def _executor(args: argparse.Namespace) -> Any:
+    """The executor ``--jobs``/``--scheduler`` ask for (None: the in-process loop; Dask is imported only otherwise)."""
+    if args.jobs == 1 and args.scheduler is None:
+        return None
+    from fearguard.drive.cluster import executor_for
+
+    return executor_for(args.jobs, args.scheduler)
+
+
+def _on(executor: Any) -> str:
+    """`` on a local Dask cluster of 2 worker processes`` for a command's first line ('' in this process)."""
+    return f" on {executor.where}" if executor is not None else ""
 
 
 def _latest_suite() -> Path:
@@ -439,8 +526,10 @@ def cmd_duckietown_suite(args: argparse.Namespace) -> int:
     """The development maps guarded / unguarded / expert, obstacles, domain randomisation → suite.md, suite.json."""
     from fearguard.worlds.duckietown.suite import run_suite
 
+    executor = _executor(args)
     out = args.out or _new_out("duckietown-suite", f"{args.seeds}seeds")
-    table = run_suite(out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds, jobs=args.jobs,
+    print(f"duckietown-suite → {out}{_on(executor)}", file=sys.stderr)
+    table = run_suite(out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds, executor=executor,
                       on_run=lambda line: print(line, flush=True), resume=args.resume)
     print(table)
     print(f"wrote {out}/runs.jsonl, suite.md, suite.json")
@@ -491,6 +580,24 @@ def _position(text: str) -> str:
     if not position_form_ok(text):
         raise argparse.ArgumentTypeError(f"{text!r}: {POSITION_FORMS}")
     return text
+
+
+def _scheduler(text: str) -> str:
+    """An argparse type for ``--scheduler``: a Dask scheduler's address (whether it answers is checked when the run starts)."""
+    from fearguard.drive.cluster import ADDRESS_FORM, scheduler_address_ok
+
+    if not scheduler_address_ok(text):
+        raise argparse.ArgumentTypeError(f"{text!r} is not {ADDRESS_FORM}")
+    return text.strip()
+
+
+def _batch_options(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--jobs N`` / ``--scheduler ADDRESS`` (one or the other) of every command that runs a plan of runs."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--jobs", type=_count(1), default=1, help=f"{what} at a time on a local Dask cluster of N single-threaded "
+                       "worker processes (default 1: one after the other in this process, no Dask); needs fearguard[cluster]")
+    where.add_argument("--scheduler", type=_scheduler, default=None, metavar="ADDRESS",
+                       help=f"run the {what} on the workers of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (docs/cluster.md)")
 
 
 def _folder(text: str) -> str:
@@ -620,6 +727,7 @@ def build_parser() -> argparse.ArgumentParser:
     suite.add_argument("--resume", action="store_true", help="skip the runs already in OUT/runs.jsonl (after an interruption; "
                        "without --out: the newest fearguard-out/suite-* folder)")
     suite.add_argument("--verbose", action="store_true", help="print each run as it finishes")
+    _batch_options(suite, "runs")
     suite.set_defaults(func=cmd_suite)
     listing = sub.add_parser("scenarios", help="list the bundled scenarios (name and what each tests)")
     listing.add_argument("folder", nargs="?", type=_folder, default=None,
@@ -665,7 +773,7 @@ def build_parser() -> argparse.ArgumentParser:
     dts.add_argument("--maps", nargs="*", default=None, help="lane maps (default: loop_empty small_loop zigzag_dists straight_road)")
     dts.add_argument("--rand-seconds", type=_number(above=0.0), default=None, help="duration of each randomised drive (default: --seconds)")
     dts.add_argument("--resume", action="store_true", help="skip the drives already in OUT/runs.jsonl (after an interruption)")
-    dts.add_argument("--jobs", type=_count(1), default=1, help="drives at a time, each in its own process (default 1)")
+    _batch_options(dts, "drives")
     dts.set_defaults(func=cmd_duckietown_suite)
     return parser
 

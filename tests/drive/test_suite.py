@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
+from fearguard.drive.cluster import DaskExecutor
 from fearguard.drive.interrupt import StopSignal
 from fearguard.drive.plan import RunSpec, row_key, run_row, runner
-from fearguard.drive.suite import finished_rows, process_pool, run_plan
+from fearguard.drive.suite import finished_rows, run_plan
 from fearguard.sim.scenario import BUNDLED
 from fearguard.sim.suite import plan
 
@@ -32,9 +33,9 @@ def _without_spec(row: dict) -> dict:
     return {k: v for k, v in row.items() if k != "spec"}
 
 
-def test_serial_and_worker_processes_give_the_same_rows_in_plan_order(specs: list[RunSpec], tmp_path: Path) -> None:
+def test_serial_and_a_local_dask_cluster_give_the_same_rows_in_plan_order(specs: list[RunSpec], tmp_path: Path) -> None:
     serial = run_plan(specs, runs_log=tmp_path / "a.jsonl")
-    pooled = run_plan(specs, runs_log=tmp_path / "b.jsonl", executor=process_pool(2))
+    pooled = run_plan(specs, runs_log=tmp_path / "b.jsonl", executor=DaskExecutor(jobs=2))
     assert [r["spec"] for r in serial.rows] == [s.to_json() for s in specs] == [r["spec"] for r in pooled.rows]
     assert serial.rows == pooled.rows and len(serial.rows) == 8 and not serial.interrupted
     assert sorted(map(json.dumps, finished_rows(tmp_path / "b.jsonl"))) == sorted(map(json.dumps, serial.rows))

@@ -20,7 +20,7 @@ import numpy as np
 
 from fearguard.drive.interrupt import StopSignal
 from fearguard.drive.plan import RunSpec
-from fearguard.drive.suite import PlanResult, run_plan
+from fearguard.drive.suite import Executor, PlanResult, run_plan
 from fearguard.errors import ScenarioError
 from fearguard.outputs.recorder import SUMMARY_NAME, write_json
 from fearguard.outputs.timeline import plot_timeline
@@ -188,20 +188,29 @@ def run_row(spec: RunSpec, stop: StopSignal | None = None) -> dict[str, Any]:
     return suite_row(result, Road(scenario.road).length_m)
 
 
+def row_line(row: dict[str, Any]) -> str:
+    """One finished run in a line: ``night seed 3 guarded: pass``."""
+    return f"{row['scenario']} seed {row['seed']} {row['controller']}: {'pass' if row['passed'] else 'FAIL'}"
+
+
 def run_suite(
     files: Iterable[Path], seeds: int, controllers: Sequence[str] = CONTROLLERS, on_run: Callable[[str], None] | None = None,
     runs_log: Path | None = None, resume: bool = False, stop: StopSignal | None = None,
-    on_progress: Callable[[int, int], None] | None = None,
+    on_progress: Callable[[int, int], None] | None = None, executor: Executor | None = None,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
 ) -> SuiteProgress:
     """Every scenario × seed × controller through the one suite (``drive/suite.py``): a row per finished run, appended to
-    ``runs_log`` as it finishes; ``resume`` skips the runs already there."""
+    ``runs_log`` as it finishes; ``resume`` skips the runs already there; ``executor`` runs the rows (None: in this
+    process, one after the other; ``cluster.DaskExecutor``: on Dask's workers)."""
 
     def said(row: dict[str, Any]) -> None:
+        if on_row is not None:
+            on_row(row)
         if on_run is not None:
-            on_run(f"{row['scenario']} seed {row['seed']} {row['controller']}: {'pass' if row['passed'] else 'FAIL'}")
+            on_run(row_line(row))
 
     return run_plan(plan(files, seeds, controllers), runs_log=runs_log, resume=resume, stop=stop, on_row=said,
-                    on_progress=on_progress)
+                    on_progress=on_progress, executor=executor)
 
 
 def suite_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from fearguard.drive.plan import RunSpec
-from fearguard.drive.suite import process_pool, run_plan
+from fearguard.drive.suite import Executor, run_plan
 from fearguard.outputs.report import json_value
 from fearguard.worlds.duckietown.drive import DriveOptions, drive
 from fearguard.worlds.duckietown.report import suite_markdown
@@ -150,10 +150,11 @@ def merge(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[di
 
 
 def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps: Sequence[str] | None = None,
-              rand_seconds: float | None = None, jobs: int = 1, on_run: Callable[[str], None] | None = None,
-              resume: bool = False) -> str:
-    """The plan through the one suite (``drive/suite.py``; ``jobs`` drives at a time, each in its own process); runs.jsonl
-    grows a row per drive, suite.md / suite.json are rewritten after every drive. Returns the markdown."""
+              rand_seconds: float | None = None, executor: Executor | None = None, on_run: Callable[[str], None] | None = None,
+              resume: bool = False, on_progress: Callable[[int, int], None] | None = None) -> str:
+    """The plan through the one suite (``drive/suite.py``; ``executor``: e.g. ``cluster.DaskExecutor(jobs=2)``, two
+    drives at a time, each in its own worker process); runs.jsonl grows a row per drive, suite.md / suite.json are
+    rewritten after every drive. Returns the markdown."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     specs = plan(seconds, seeds, maps, rand_seconds, out)
@@ -175,7 +176,6 @@ def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps:
             on_run(f"{row['run']} {row['controller']}: progress {row['progress_m']:.2f} m, departures {row['departures']}, "
                    f"collisions {row['collisions']}, EMERGENCY {row['emergency_s']:.1f} s")
 
-    result = run_plan(specs, runs_log=out / "runs.jsonl", resume=resume, executor=process_pool(jobs) if jobs > 1 else None,
-                      on_row=said)
+    result = run_plan(specs, runs_log=out / "runs.jsonl", resume=resume, executor=executor, on_row=said, on_progress=on_progress)
     write(result.rows)
     return markdown
