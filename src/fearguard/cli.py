@@ -310,6 +310,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from fearguard.replay.run import ReplayOptions, replay
     from fearguard.vehicle import resolve_vehicle
 
+    if len(args.recordings) > 1:
+        return _replay_fleet(args)
+    args.recording = args.recordings[0]
     steer, _ = resolve_steer(args.steer)
     options = ReplayOptions(
         rules=args.rules, camera=args.camera, sensor_log=args.sensor_log, strict=args.strict, no_ultrasonic=args.no_ultrasonic,
@@ -322,6 +325,54 @@ def cmd_replay(args: argparse.Namespace) -> int:
         result = replay(args.recording, out, options, on_frame=progress.update, stop=args.stop)
     _print_replay_summary(result.summary, result.out_dir)
     return _interrupted_exit(args.stop) if result.interrupted else 0
+
+
+def _replay_fleet(args: argparse.Namespace) -> int:
+    """Several recordings → one folder each under --out, replays.md / replays.json: the fleet as a plan of replay rows
+    (``replay/fleet.py``), one after the other or on Dask; exit 1 if a recording could not be replayed."""
+    from fearguard.camera import load_camera
+    from fearguard.drive.suite import run_plan
+    from fearguard.files.steer_import import resolve_steer
+    from fearguard.fuzzy.loader import load_rules
+    from fearguard.outputs.recorder import write_json
+    from fearguard.replay import fleet
+    from fearguard.vehicle import resolve_vehicle
+
+    if args.sensor_log is not None:
+        raise FearguardError("replay: --sensor-log belongs to one recording; replay a fleet of recordings that carry their own "
+                             "sensors (ROS bags, Donkey tubs), or each recording with its log on its own")
+    executor = _executor(args)
+    load_rules(args.rules), resolve_vehicle(args.vehicle), resolve_steer(args.steer)  # a bad option fails before any replay
+    if args.camera:
+        load_camera(args.camera)
+    out = Path(args.out) if args.out else _new_out("replay", f"fleet-{len(args.recordings)}")
+    out.mkdir(parents=True, exist_ok=True)
+    options = {"rules": args.rules, "camera": args.camera, "strict": args.strict, "no_ultrasonic": args.no_ultrasonic,
+               "qr_localisation": args.qr_localisation, "speed_mps": args.speed_mps, "fps": args.fps, "start": args.from_,
+               "stop": args.to, "every": args.every, "video": args.video, "plots": not args.no_plots, "mcap": args.mcap,
+               "vehicle": args.vehicle, "steer": args.steer,
+               "topics": {"image": args.image_topic, "range": args.range_topic, "speed": args.speed_topic, "qr": args.qr_topic}}
+    specs = fleet.plan(args.recordings, out, options)
+    print(f"replay: {len(specs)} recordings → {out}{_on(executor)}", file=sys.stderr)
+    with _RunProgress("replay", executor, line=_fleet_line, failed=lambda r: "error" in r) as bar:
+        result = run_plan(specs, runs_log=out / "runs.jsonl", resume=args.resume, stop=args.stop, executor=executor,
+                          on_row=bar.row, on_progress=bar.update)
+    data, markdown = fleet.merge(result.rows)
+    (out / "replays.md").write_text(markdown, encoding="utf-8")
+    write_json(out / "replays.json", {"interrupted": result.interrupted, "planned": result.planned, **data})
+    print(markdown)
+    print(f"wrote {out}/replays.md, replays.json, runs.jsonl and a folder per recording ({len(result.rows)} of {result.planned})")
+    if result.interrupted:
+        print(f"interrupted by {result.stopped_by}: run the same command with --resume to replay the rest")
+        return _interrupted_exit(args.stop)
+    return 1 if data["totals"]["failed"] else 0
+
+
+def _fleet_line(row: dict) -> str:
+    if "error" in row:
+        return f"{row['recording']}: {row['error']}"
+    emergency = row["mode_s"]["EMERGENCY"]
+    return f"{row['recording']}: {row['frames']} frames, EMERGENCY {emergency:.1f} s, {row['emergency_episodes']} episode(s)"
 
 
 def _interrupted_exit(stop: StopSignal) -> int:
@@ -681,10 +732,12 @@ def build_parser() -> argparse.ArgumentParser:
     calibrate.add_argument("--out", default=None, help="camera file to write (TOML), e.g. camera.toml "
                            "(default: camera.toml in a new folder fearguard-out/calibrate-...-TIMESTAMP)")
     calibrate.set_defaults(func=cmd_calibrate)
-    rp = sub.add_parser("replay", help="a recorded drive (video, image folder, Donkey tub) through the supervisor, open loop")
-    rp.add_argument("recording", help="video file, folder of images, or Donkey Car tub folder")
+    rp = sub.add_parser("replay", help="recorded drives (video, image folder, Donkey tub, ROS bag) through the supervisor, open loop")
+    rp.add_argument("recordings", nargs="+", metavar="recording",
+                    help="video file, folder of images, Donkey Car tub folder or ROS bag; several: a fleet, a folder each under --out")
     rp.add_argument("--out", type=_out_folder, default=None,
-                    help="output folder (log.jsonl, summary.json, timeline.png, the video) " + OUT_HELP % "replay")
+                    help="output folder (log.jsonl, summary.json, timeline.png, the video; a fleet: a folder per recording, "
+                    "replays.md, replays.json) " + OUT_HELP % "replay")
     rp.add_argument("--vehicle", default=None, help="vehicle preset (" + ", ".join(PRESETS) + ") or vehicle.toml "
                     "(default: VehicleLimits(), a 1:10 car capped at 2 m/s); the range sensor is what the sensor log has")
     rp.add_argument("--steer", default=None, help="your steering function module:function, frame -> degrees "
@@ -708,6 +761,8 @@ def build_parser() -> argparse.ArgumentParser:
                        ("qr", "QR payloads (std_msgs/String)")):
         rp.add_argument(f"--{role}-topic", default=None, help=f"a ROS bag's topic for {what} (default: the only one there is"
                         + ("" if role == "image" else "; none: ignore it") + ")")
+    rp.add_argument("--resume", action="store_true", help="a fleet: skip the recordings already in OUT/runs.jsonl")
+    _batch_options(rp, "recordings")
     rp.set_defaults(func=cmd_replay)
     run = sub.add_parser("run", help="one scenario closed loop: rendered frames → perception → supervisor → car")
     run.add_argument("scenario", help="a bundled scenario's name (e.g. night; `fearguard scenarios` lists them) or a scenario file")

@@ -72,7 +72,7 @@ def test_a_row_names_its_run_and_old_rows_are_recognised() -> None:
     assert row_key({"spec": spec.to_json()}) == ("sim", "clear_straight", "guarded", 3)
     assert row_key({"scenario": "night", "seed": 2, "controller": "aeb", "passed": True}) == ("sim", "night", "aeb", 2)  # before plans
     assert row_key({"spec": {"world": "sim"}}) is None and row_key({"frames": 3}) is None
-    with pytest.raises(ValueError, match="unknown world 'carla'; known: sim, duckietown"):
+    with pytest.raises(ValueError, match="unknown world 'carla'; known: sim, duckietown, replay"):
         runner("carla")
     row = run_row(RunSpec("sim", "clear_straight", "unguarded", 1, {"file": str(SHORT)}))
     assert row["spec"]["controller"] == "unguarded" and row["scenario"] == "clear_straight" and row["collisions"] == 0

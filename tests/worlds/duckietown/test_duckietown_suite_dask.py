@@ -10,8 +10,8 @@ import pytest
 pytest.importorskip("gym_duckietown", reason="the Duckietown simulator is not installed (bash .ci/duckietown.sh)")
 pytest.importorskip("distributed", reason="Dask is not installed (pip install 'fearguard[cluster]')")
 
-from fearguard.drive.cluster import DaskExecutor  # noqa: E402 - after the skips
-from fearguard.worlds.duckietown.suite import run_suite  # noqa: E402
+from fearguard.drive.cluster import DaskExecutor
+from fearguard.worlds.duckietown.suite import run_suite
 
 TIMING = ("controller_ms", "simulator_ms")  # per-step medians: the only fields that depend on the machine's load
 
