@@ -1,5 +1,5 @@
-"""Command line: ``demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``scenarios``, ``suite``, ``verify``,
-``duckietown``.
+"""Command line: ``demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``scenarios``, ``suite``, ``sweep``,
+``verify``, ``duckietown``, ``duckietown-suite``.
 
 A thin layer: it parses arguments, calls the library, prints, and maps errors to exit codes
 (0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr, 130 / 143 interrupted by SIGINT /
@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from fearguard.observation import Lead
     from fearguard.supervisor import FearGuard
 
-FRAME_LOOPS = ("replay", "run", "suite")  # commands that finish the current frame on a signal
+FRAME_LOOPS = ("replay", "run", "suite", "sweep")  # commands that finish the current frame on a signal
 MCAP_HELP = "also write run.mcap for Foxglove: the annotated image, the command, the cues and the reasons (the ros extra)"
 VIDEO_HELP = "also write the annotated video (annotated.mp4, H.264; annotated.avi, MJPG, without the video extra)"
 OUT_ROOT = Path("fearguard-out")  # where a command writes when --out is not given: OUT_ROOT/COMMAND-LABEL-YYYYmmdd-HHMMSS
@@ -506,6 +506,57 @@ def _on(executor: Any) -> str:
     return f" on {executor.where}" if executor is not None else ""
 
 
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """Numbers of the rules and the vehicle × scenarios × seeds, guarded, against the unguarded car → sweep.md, sweep.json,
+    sweep.png; exit 1 if no combination kept zero collisions and zero lane departures."""
+    from fearguard.drive.suite import run_plan
+    from fearguard.outputs.recorder import write_json
+    from fearguard.sim import sweep
+    from fearguard.sim.suite import scenario_files
+
+    files = scenario_files(args.folder)
+    specs = sweep.plan(files, args.seeds, args.set)  # every combination checked against every scenario's files first
+    executor = _executor(args)
+    out = Path(args.out) if args.out else _new_out("sweep", f"{len(specs)}runs")
+    out.mkdir(parents=True, exist_ok=True)
+    combos = len(sweep.combinations(args.set))
+    print(f"sweep: {combos} combination(s) × {len(files)} scenarios × {args.seeds} seed(s), guarded, and the unguarded car once "
+          f"({len(specs)} runs) → {out}{_on(executor)}", file=sys.stderr)
+    with _RunProgress("sweep", executor, line=sweep.row_line, failed=lambda r: r["controller"] == "guarded"
+                      and bool(r["collisions"] or r["lane_departures"])) as bar:
+        result = run_plan(specs, runs_log=out / "runs.jsonl", resume=args.resume, stop=args.stop, executor=executor,
+                          on_row=bar.row, on_progress=bar.update)
+    table, reference = sweep.merge(result.rows), sweep.unguarded_totals(result.rows)
+    markdown = sweep.sweep_markdown(table, reference)
+    (out / "sweep.md").write_text(markdown, encoding="utf-8")
+    write_json(out / "sweep.json", {"interrupted": result.interrupted, "planned_runs": result.planned, "finished_runs": len(result.rows),
+                                    "settings": {s.key: list(s.values) for s in args.set}, "combinations": table,
+                                    "safe_ranked": [t["combination"] for t in sweep.ranked_safe(table)], "unguarded": reference})
+    plotted = ""
+    if table:
+        try:
+            sweep.sweep_figure(table, reference, title=out.name).savefig(out / "sweep.png", dpi=90)
+            plotted = ", sweep.png"
+        except ModuleNotFoundError as exc:  # the core install has no matplotlib
+            print(f"warning: sweep.png needs {exc.name}: pip install 'fearguard[desktop]'", file=sys.stderr)
+    print(markdown)
+    print(f"wrote {out}/runs.jsonl, sweep.md, sweep.json{plotted} ({len(result.rows)} of {result.planned} runs)")
+    if result.interrupted:
+        print(f"interrupted by {result.stopped_by}: the table holds the finished runs; run the same command with --resume to go on")
+        return _interrupted_exit(args.stop)
+    return 0 if sweep.ranked_safe(table) else 1
+
+
+def _setting(text: str) -> Any:
+    """An argparse type for ``sweep --set KEY=V1,V2``: a known dotted key and TOML values (exit 2 with "did you mean")."""
+    from fearguard.sim.sweep import parse_setting
+
+    try:
+        return parse_setting(text)
+    except FearguardError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def _latest_suite() -> Path:
     """``suite --resume`` without --out: the newest fearguard-out/suite-* folder (the one an interruption left)."""
     found = sorted((p for p in OUT_ROOT.glob("suite-*") if (p / "runs.jsonl").is_file()), key=lambda p: p.stat().st_mtime)
@@ -784,6 +835,17 @@ def build_parser() -> argparse.ArgumentParser:
     suite.add_argument("--verbose", action="store_true", help="print each run as it finishes")
     _batch_options(suite, "runs")
     suite.set_defaults(func=cmd_suite)
+    sw = sub.add_parser("sweep", help="numbers of the rules and the vehicle × scenarios × seeds: safety against progress")
+    sw.add_argument("folder", nargs="?", type=_folder, default=None, help="folder of scenario files (default: the bundled library)")
+    sw.add_argument("--set", type=_setting, action="append", required=True, metavar="KEY=V1,V2",
+                    help="values to try for a number of the rule file (policy.hold_s=1,2,3) or the vehicle "
+                    "(vehicle.max_speed_mps=1.5,2); repeat for more keys: every combination runs")
+    sw.add_argument("--seeds", type=_count(1), default=3, help="seeds per scenario, >= 1 (default 3)")
+    sw.add_argument("--out", type=_out_folder, default=None, help="output folder for runs.jsonl, sweep.md, sweep.json, sweep.png "
+                    + OUT_HELP % "sweep")
+    sw.add_argument("--resume", action="store_true", help="skip the runs already in OUT/runs.jsonl (after an interruption)")
+    _batch_options(sw, "runs")
+    sw.set_defaults(func=cmd_sweep)
     listing = sub.add_parser("scenarios", help="list the bundled scenarios (name and what each tests)")
     listing.add_argument("folder", nargs="?", type=_folder, default=None,
                          help="another folder of scenario files (default: the bundled library)")

@@ -161,6 +161,7 @@ def suite_row(result: RunResult, route_m: float | None = None) -> dict[str, Any]
         "distance_m": m.distance_m, "route_completion": (min(1.0, max(0.0, m.final_s_m / route_m))
                                                          if route_m and m.final_s_m is not None else None),
         "first_stop_t_s": stops[0] if stops else None, "emergency_entries": m.emergency_entries,
+        "emergency_s": m.time_in_mode_s.get("EMERGENCY", 0.0),
         "failed": [e.name for e in result.expectations if e.failed and e.outcome],
         "supervisor_failed": [e.name for e in result.expectations if e.failed and not e.outcome],
         "supervisor_checks": [e.name for e in result.expectations if not e.outcome],
@@ -180,9 +181,11 @@ def plan(files: Iterable[Path], seeds: int, controllers: Sequence[str] = CONTROL
 
 
 def run_row(spec: RunSpec, stop: StopSignal | None = None) -> dict[str, Any]:
-    """One run of the simulator's suite, no per-frame files: its row (``"interrupted": true`` if ``stop`` cut it short)."""
+    """One run of the simulator's suite, no per-frame files: its row (``"interrupted": true`` if ``stop`` cut it short).
+    The options may change numbers of the rules (``"policy"``) and of the supervisor's vehicle (``"vehicle"``): a sweep."""
     scenario = load_scenario(spec.options["file"])
-    result = run_scenario(scenario, spec.seed, spec.controller, stop=stop)
+    result = run_scenario(scenario, spec.seed, spec.controller, stop=stop, policy=spec.options.get("policy"),
+                          vehicle=spec.options.get("vehicle"))
     if result.interrupted:
         return {"interrupted": True}
     return suite_row(result, Road(scenario.road).length_m)
