@@ -196,14 +196,22 @@ class _Progress:
         self._bar: Any = None
         self._live = sys.stderr.isatty()
         try:
+            import rich.progress
             from rich.console import Console
-            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
         except ModuleNotFoundError:  # the core install has no rich: the plain line below
             return
         console = Console(stderr=True)
-        self._bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[rate]}"),
-                             TimeRemainingColumn(), console=console, disable=not console.is_terminal, transient=False)
-        self._task = self._bar.add_task(label, total=None, rate="")
+        self._bar = rich.progress.Progress(*self._columns(rich.progress), console=console, disable=not console.is_terminal,
+                                           transient=False)
+        self._task = self._bar.add_task(label, total=None, **self._fields())
+
+    def _columns(self, p: Any) -> list[Any]:
+        """The bar's columns (``p``: rich.progress)."""
+        return [p.TextColumn(self._label), p.BarColumn(), p.MofNCompleteColumn(), p.TextColumn("{task.fields[rate]}"),
+                p.TimeRemainingColumn()]
+
+    def _fields(self) -> dict[str, Any]:
+        return {"rate": ""}
 
     def __enter__(self) -> _Progress:
         if self._bar is not None:
@@ -231,69 +239,53 @@ class _Progress:
             print(f"\r{self._label}: {done}{f'/{total}' if total else ''} {self._unit} {rate}   ", end="", file=sys.stderr, flush=True)
 
 
-class _RunProgress:
+class _RunProgress(_Progress):
     """Progress over the runs of a plan (suite, sweep, fleet replay, duckietown-suite): runs done of the plan, failures,
-    the time left and the workers running them; on a terminal a rich bar (or a plain line redrawn in place), without one
-    (a CI log, a pipe, nohup) a line per finished run, naming it. Resumed runs count as done; the time left is estimated
-    from the runs finished in this session."""
+    the time left and the workers running them; without a terminal a line per finished run, naming it and how it went.
+    Resumed runs count as done; the time left is estimated from the runs finished in this session."""
 
     def __init__(self, label: str, executor: Any = None, *, line: Callable[[dict], str], failed: Callable[[dict], bool]) -> None:
-        self._label, self._executor, self._line, self._failed = label, executor, line, failed
-        self._start, self._first_done = time.perf_counter(), None
-        self._failures, self._last = 0, ""
-        self._live = sys.stderr.isatty()
-        self._bar: Any = None
-        self._task: Any = None
-        try:
-            from rich.console import Console
-            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
-        except ModuleNotFoundError:  # the core install has no rich: the plain line below
-            return
-        console = Console(stderr=True)
-        self._bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[failed]} failed"),
-                             TextColumn("{task.fields[workers]}"), TimeRemainingColumn(), console=console,
-                             disable=not console.is_terminal, transient=False)
+        self._executor, self._line, self._failed = executor, line, failed
+        self._failures, self._last, self._first_done = 0, "", None
+        super().__init__(label, unit="runs")
 
-    def __enter__(self) -> _RunProgress:
-        if self._bar is not None:
-            self._bar.__enter__()
-        return self
+    def _columns(self, p: Any) -> list[Any]:
+        return [p.TextColumn(self._label), p.BarColumn(), p.MofNCompleteColumn(), p.TextColumn("{task.fields[failed]} failed"),
+                p.TextColumn("{task.fields[workers]}"), p.TimeRemainingColumn()]
 
-    def __exit__(self, *exc: object) -> None:
-        if self._bar is not None:
-            self._bar.__exit__(None, None, None)
-        elif self._live and self._first_done is not None:
-            print(file=sys.stderr)
+    def _fields(self) -> dict[str, Any]:
+        return {"failed": 0, "workers": ""}
 
     @property
-    def workers(self) -> int:
-        """Workers running the rows: the cluster's, or 1 (this process)."""
-        return int(getattr(self._executor, "workers", 1))
+    def workers(self) -> str:
+        """The workers running the rows: the cluster's, or this process."""
+        n = int(getattr(self._executor, "workers", 1))
+        return f"{n} worker{'s' if n != 1 else ''}"
 
     def row(self, row: dict) -> None:
-        """A run finished (``run_plan``'s on_row): remember its line and whether it failed; ``update`` follows."""
+        """A run finished (``run_plan``'s on_row): its line and whether it failed; ``update`` follows."""
         self._failures += bool(self._failed(row))
         self._last = self._line(row)
 
-    def update(self, done: int, total: int) -> None:
+    def update(self, done: int, total: int | None) -> None:
         """``run_plan``'s on_progress: runs done (resumed ones included) of the plan's."""
-        now = time.perf_counter() - self._start
-        if self._first_done is None:
+        elapsed = time.perf_counter() - self._start
+        first = self._first_done is None
+        if first:
             self._first_done = done
-        new = done - self._first_done
-        eta = f", {_duration(now / new * (total - done))} left" if new and done < total else ""
-        workers = f"{self.workers} worker{'s' if self.workers != 1 else ''}"
+        new = done - (self._first_done or 0)
         if self._bar is not None and self._live:
-            if self._task is None:
-                self._task = self._bar.add_task(self._label, total=total, completed=done, failed=0, workers=workers)
-            self._bar.update(self._task, completed=done, total=total, failed=self._failures, workers=workers)
+            if first:  # the resumed runs are no speed: the time left counts from here
+                self._bar.reset(self._task, total=total, completed=done)
+            self._bar.update(self._task, completed=done, total=total, failed=self._failures, workers=self.workers)
             return
-        text = f"{self._label}: {done}/{total} runs, {self._failures} failed, {workers}{eta}"
-        if not self._live:
-            if new or done:
-                print(text + (f": {self._last}" if new else " (resumed)"), file=sys.stderr, flush=True)
-        else:
+        left = f", {_duration(elapsed / new * ((total or done) - done))} left" if new and done != total else ""
+        text = f"{self._label}: {done}/{total} runs, {self._failures} failed, {self.workers}{left}"
+        if self._live:
+            self._drawn = elapsed
             print(f"\r{text}   ", end="", file=sys.stderr, flush=True)
+        elif new or done:
+            print(text + (f": {self._last}" if new else " (resumed)"), file=sys.stderr, flush=True)
 
 
 def _duration(seconds: float) -> str:
@@ -631,8 +623,13 @@ def cmd_duckietown_suite(args: argparse.Namespace) -> int:
     executor = _executor(args)
     out = args.out or _new_out("duckietown-suite", f"{args.seeds}seeds")
     print(f"duckietown-suite → {out}{_on(executor)}", file=sys.stderr)
-    table = run_suite(out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds, executor=executor,
-                      on_run=lambda line: print(line, flush=True), resume=args.resume)
+    def failed(r: dict) -> bool:
+        return r["controller"] == "guarded" and bool(r["departures"] or r["collisions"] or r["invalid_pose"])
+
+    with _RunProgress("duckietown-suite", executor, line=lambda r: f"{r['run']} {r['controller']}", failed=failed) as bar:
+        table = run_suite(out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds,
+                          executor=executor, on_run=lambda line: print(line, flush=True), resume=args.resume,
+                          on_progress=bar.update, on_row=bar.row)
     print(table)
     print(f"wrote {out}/runs.jsonl, suite.md, suite.json")
     return 0

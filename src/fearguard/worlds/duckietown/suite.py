@@ -151,7 +151,8 @@ def merge(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[di
 
 def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps: Sequence[str] | None = None,
               rand_seconds: float | None = None, executor: Executor | None = None, on_run: Callable[[str], None] | None = None,
-              resume: bool = False, on_progress: Callable[[int, int], None] | None = None) -> str:
+              resume: bool = False, on_progress: Callable[[int, int], None] | None = None,
+              on_row: Callable[[dict[str, Any]], None] | None = None) -> str:
     """The plan through the one suite (``drive/suite.py``; ``executor``: e.g. ``cluster.DaskExecutor(jobs=2)``, two
     drives at a time, each in its own worker process); runs.jsonl grows a row per drive, suite.md / suite.json are
     rewritten after every drive. Returns the markdown."""
@@ -169,6 +170,8 @@ def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps:
 
     def said(row: dict[str, Any]) -> None:
         finished.append(row)
+        if on_row is not None:
+            on_row(row)
         order = {spec.key: i for i, spec in enumerate(specs)}
         write(sorted(finished, key=lambda r: order.get((r["spec"]["world"], r["spec"]["name"], r["spec"]["controller"],
                                                         r["spec"]["seed"]), 0)))
