@@ -33,7 +33,11 @@ class DaskProcesses:
         self.workers: list[subprocess.Popen] = []
         self.scheduler = self._start("scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
                                      "--scheduler-file", str(folder / "scheduler.json"))
-        self.address = self._address(folder / "scheduler.json")
+        try:
+            self.address = self._address(folder / "scheduler.json")
+        except BaseException:  # pytest.fail (a scheduler that never came up) is one: no process is left behind
+            self.close()
+            raise
 
     def _start(self, *args: str) -> subprocess.Popen:
         log = open(self.folder / f"{args[0]}-{time.monotonic_ns()}.log", "wb")  # the process writes to it

@@ -33,9 +33,10 @@ def _without_spec(row: dict) -> dict:
     return {k: v for k, v in row.items() if k != "spec"}
 
 
-def test_serial_and_a_local_dask_cluster_give_the_same_rows_in_plan_order(specs: list[RunSpec], tmp_path: Path) -> None:
+def test_serial_and_dask_workers_give_the_same_rows_in_plan_order(specs: list[RunSpec], tmp_path: Path, dask_cluster) -> None:
+    """The session's real scheduler and two workers (tests/conftest.py); a local cluster: tests/drive/test_cluster.py."""
     serial = run_plan(specs, runs_log=tmp_path / "a.jsonl")
-    pooled = run_plan(specs, runs_log=tmp_path / "b.jsonl", executor=DaskExecutor(jobs=2))
+    pooled = run_plan(specs, runs_log=tmp_path / "b.jsonl", executor=DaskExecutor(scheduler=dask_cluster.address))
     assert [r["spec"] for r in serial.rows] == [s.to_json() for s in specs] == [r["spec"] for r in pooled.rows]
     assert serial.rows == pooled.rows and len(serial.rows) == 8 and not serial.interrupted
     assert sorted(map(json.dumps, finished_rows(tmp_path / "b.jsonl"))) == sorted(map(json.dumps, serial.rows))

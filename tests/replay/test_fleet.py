@@ -1,5 +1,5 @@
 """``fearguard replay REC1 REC2 ...``: a fleet of real recordings as a plan of replay rows (replay/fleet.py), one folder
-each, replays.md / replays.json; the same rows one after the other and on a local Dask cluster; one recording as before."""
+each, replays.md / replays.json; the same rows one after the other and on Dask workers; one recording as before."""
 
 from __future__ import annotations
 
@@ -49,9 +49,10 @@ def test_a_fleet_writes_a_folder_per_recording_and_the_table(recordings: list[st
 
 
 @pytest.mark.slow
-def test_a_fleet_on_two_dask_workers_gives_the_serial_rows(recordings: list[str], tmp_path: Path) -> None:
+def test_a_fleet_on_two_dask_workers_gives_the_serial_rows(recordings: list[str], tmp_path: Path, dask_cluster) -> None:
+    """``--scheduler``: the session's real scheduler and two workers (tests/conftest.py)."""
     assert main(["replay", *recordings, "--out", str(tmp_path / "serial"), *CUT]) == 0
-    assert main(["replay", *recordings, "--out", str(tmp_path / "dask"), *CUT, "--jobs", "2"]) == 0
+    assert main(["replay", *recordings, "--out", str(tmp_path / "dask"), *CUT, "--scheduler", dask_cluster.address]) == 0
     serial, dask = (sorted(map(json.dumps, _rows(tmp_path / name))) for name in ("serial", "dask"))  # runs.jsonl: arrival order
     assert len(dask) == 3 and dask == serial
     assert (tmp_path / "dask" / "replays.md").read_text() == (tmp_path / "serial" / "replays.md").read_text()

@@ -138,10 +138,12 @@ def test_the_table_ranks_the_safe_combinations_and_marks_the_pareto_front() -> N
 
 
 @pytest.mark.slow
-def test_the_sweep_command_on_two_dask_workers_gives_the_serial_table_and_a_plot(short: Path, tmp_path: Path, capsys) -> None:
+def test_the_sweep_command_on_two_dask_workers_gives_the_serial_table_and_a_plot(short: Path, tmp_path: Path, capsys,
+                                                                                 dask_cluster) -> None:
+    """``--scheduler``: the session's real scheduler and two workers (tests/conftest.py)."""
     argv = ["sweep", str(short), "--set", "policy.hold_s=1,3", "--set", "vehicle.max_speed_mps=1,2", "--seeds", "1"]
     assert main([*argv, "--out", str(tmp_path / "serial")]) == 0
-    assert main([*argv, "--out", str(tmp_path / "dask"), "--jobs", "2"]) == 0
+    assert main([*argv, "--out", str(tmp_path / "dask"), "--scheduler", dask_cluster.address]) == 0
     out = capsys.readouterr().out
     serial, dask = (json.loads((tmp_path / name / "sweep.json").read_text()) for name in ("serial", "dask"))
     assert dask["combinations"] == serial["combinations"] and len(serial["combinations"]) == 4
