@@ -1,5 +1,6 @@
 """A real Dask cluster for tests: ``dask scheduler`` and ``dask worker`` processes on 127.0.0.1, as docs/cluster.md
-starts them (random free ports, one thread per worker, the worker YAML of the docs), each in its own process group so
+starts them (random free ports, one thread per worker, the worker YAML of the docs, in a folder of their own as on
+another machine), each in its own process group so
 a test can kill one worker (nanny and worker process: a machine gone) and the fixture cleans every one up."""
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ class DaskProcesses:
     def _start(self, *args: str) -> subprocess.Popen:
         log = open(self.folder / f"{args[0]}-{time.monotonic_ns()}.log", "wb")  # the process writes to it
         return subprocess.Popen([sys.executable, "-m", "dask", *args], env=self.env, stdout=log, stderr=subprocess.STDOUT,
-                                start_new_session=True)
+                                start_new_session=True, cwd=self.folder)  # not the tests' folder: relative paths would not do
 
     def _address(self, path: Path) -> str:
         deadline = time.monotonic() + START_TIMEOUT_S

@@ -127,11 +127,12 @@ def test_ctrl_c_on_a_local_cluster_leaves_no_worker_behind_and_the_finished_rows
 
 # -- a real scheduler and two workers -------------------------------------------------------------
 @pytest.mark.slow
-def test_a_suite_on_a_scheduler_gives_the_serial_rows_in_the_same_tables(dask_cluster: DaskProcesses, folder: Path,
-                                                                         tmp_path: Path, serial_rows: list[dict]) -> None:
+def test_a_suite_on_a_scheduler_gives_the_serial_rows_in_the_same_tables(dask_cluster: DaskProcesses, folder: Path, tmp_path: Path,
+                                                                         serial_rows: list[dict], monkeypatch) -> None:
     """``fearguard suite --scheduler``: runs.jsonl holds the serial rows (in arrival order), the tables are the ones the
     serial suite writes (``suite_markdown`` / ``suite_table`` of the serial rows), the rows in plan order."""
-    assert main(["suite", str(folder), "--seeds", "2", "--out", str(tmp_path), "--scheduler", dask_cluster.address]) in (0, 1)
+    monkeypatch.chdir(folder.parent)  # a relative folder: the workers, started elsewhere, get absolute paths
+    assert main(["suite", folder.name, "--seeds", "2", "--out", str(tmp_path), "--scheduler", dask_cluster.address]) in (0, 1)
     cluster = finished_rows(tmp_path / "runs.jsonl")
     assert len(serial_rows) == 24 and _by_key(cluster) == _by_key(serial_rows)  # every row, equal (sim rows have no timing)
     assert (tmp_path / "suite.md").read_text() == suite_markdown(serial_rows)

@@ -170,13 +170,15 @@ def suite_row(result: RunResult, route_m: float | None = None) -> dict[str, Any]
 
 
 def plan(files: Iterable[Path], seeds: int, controllers: Sequence[str] = CONTROLLERS) -> list[RunSpec]:
-    """Every scenario × seed × controller, as rows: the seeds are each scenario's own seed and the ones after it."""
+    """Every scenario × seed × controller, as rows: the seeds are each scenario's own seed and the ones after it. The
+    scenario files are named by absolute path: a Dask worker started in another folder reads the same file."""
     if not (isinstance(seeds, int) and seeds >= 1):
         raise ValueError(f"seeds must be a whole number >= 1, got {seeds!r}")
     specs = []
     for path in files:
         scenario = load_scenario(path)
-        specs += [RunSpec("sim", scenario.name, c, scenario.seed + k, {"file": str(path)}) for k in range(seeds) for c in controllers]
+        file = str(Path(path).resolve())
+        specs += [RunSpec("sim", scenario.name, c, scenario.seed + k, {"file": file}) for k in range(seeds) for c in controllers]
     return specs
 
 
