@@ -40,7 +40,8 @@ OBSTACLE_RUNS = (  # (name, map, obstacle, range sensor, controller): 1 m ahead 
 def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None, rand_seconds: float | None = None,
          out_dir: str | Path | None = None) -> list[RunSpec]:
     """Every drive of the suite as rows, experts first (the other rows are compared to them); randomised drives last
-    ``rand_seconds``. ``out_dir``: each drive writes its folder (log, summary, plots) there."""
+    ``rand_seconds``. ``out_dir``: each drive writes its folder (log, summary, plots) there, named by absolute path (a
+    Dask worker started in another folder writes it in the same place)."""
     base = DriveOptions(seconds=seconds, plots=True)
     runs: list[tuple[str, DriveOptions]] = []
     for m in maps or LANE_MAPS:
@@ -52,7 +53,7 @@ def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None, rand_sec
         for c in ("expert", "guarded"):
             options = replace(base, map_name=DOMAIN_RAND_MAP, domain_rand=True, seed=seed, controller=c, seconds=rand_seconds or seconds)
             runs.append((f"{DOMAIN_RAND_MAP} rand {seed}", options))
-    folder = (lambda name, o: str(_folder(Path(out_dir), name, o))) if out_dir is not None else (lambda name, o: None)
+    folder = (lambda name, o: str(_folder(Path(out_dir).resolve(), name, o))) if out_dir is not None else (lambda name, o: None)
     return [RunSpec("duckietown", name, o.controller, o.seed, {**_options_json(o), "folder": folder(name, o)}) for name, o in runs]
 
 
