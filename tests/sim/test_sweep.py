@@ -101,9 +101,13 @@ def test_the_plan_runs_the_unguarded_car_once_and_every_combination_guarded(shor
 
 
 def test_a_row_runs_with_the_changed_rules_and_vehicle(tmp_path: Path) -> None:
-    """camera_blackout, seed 1: a longer hold keeps EMERGENCY longer; a lower speed cap drives less far. Same spec, same row."""
+    """camera_blackout cut to 10 s (black frames 4-5.5 s, frozen 8-9 s), seed 1: a longer hold keeps EMERGENCY longer; a
+    lower speed cap drives less far. Same spec, same row."""
+    cut = tmp_path / "camera_blackout.toml"
+    cut.write_text(BLACKOUT.read_text().replace("duration_s = 14.0", "duration_s = 10.0"))
+
     def row(**options: object) -> dict:
-        return run_row(RunSpec("sim", "camera_blackout [x]", "guarded", 1, {"file": str(BLACKOUT), **options}))
+        return run_row(RunSpec("sim", "camera_blackout [x]", "guarded", 1, {"file": str(cut), **options}))
 
     short_hold, long_hold = row(policy={"hold_s": 0.0}), row(policy={"hold_s": 4.0})
     assert long_hold["emergency_s"] > short_hold["emergency_s"] + 3.0
