@@ -14,7 +14,8 @@
    ``--jobs 2``: its wall time, runs and the safe combinations ranked by progress.
 
 The rows of (1) are compared too: both runs.jsonl must hold the same rows. The machine is shared and noisy: the ratios
-are what to read, from one run, and the load average is printed beside them.
+are what to read, from one run, with the load average and the cores each command got (its CPU seconds over its wall
+seconds) printed beside them: a ratio above 0.6 with ``--jobs 2`` getting about one core is the machine's load, not Dask.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ import argparse
 import json
 import logging
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -38,11 +40,18 @@ SWEEP_SCENARIOS = ("camera_blackout", "night", "stationary_obstacle")
 SWEEP_SETTINGS = ("policy.hold_s=1,2,3", "vehicle.max_speed_mps=1.5,2")
 
 
-def cli(*argv: str) -> tuple[float, int]:
-    """``fearguard ARGV`` in a fresh process (as a user runs it): wall seconds and exit code."""
+def cli(*argv: str) -> tuple[float, float, int]:
+    """``fearguard ARGV`` in a fresh process (as a user runs it): wall seconds, CPU seconds and exit code.
+
+    The CPU seconds are those of the command and every process under it that ended (its local cluster's workers), from
+    ``getrusage(RUSAGE_CHILDREN)``: on a machine shared with other jobs, CPU / wall says how many cores the command got.
+    """
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     done = subprocess.run([sys.executable, "-m", "fearguard.cli", *argv], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return time.perf_counter() - start, done.returncode
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime), done.returncode
 
 
 def rows(path: Path) -> dict[str, dict]:
@@ -87,11 +96,13 @@ def main() -> None:
         runs = len(picked) * args.seeds * 4
         print(f"suite: {len(picked)} bundled scenarios × {args.seeds} seed(s) × 4 controllers = {runs} runs "
               f"({', '.join(p.stem for p in picked)})")
-        one, _ = cli("suite", str(folder), "--seeds", str(args.seeds), "--out", f"{tmp}/j1", "--jobs", "1")
-        two, _ = cli("suite", str(folder), "--seeds", str(args.seeds), "--out", f"{tmp}/j2", "--jobs", "2")
+        one, cpu_one, _ = cli("suite", str(folder), "--seeds", str(args.seeds), "--out", f"{tmp}/j1", "--jobs", "1")
+        two, cpu_two, _ = cli("suite", str(folder), "--seeds", str(args.seeds), "--out", f"{tmp}/j2", "--jobs", "2")
         same = rows(Path(tmp, "j1", "runs.jsonl")) == rows(Path(tmp, "j2", "runs.jsonl"))
-        print(f"  --jobs 1 (in this process): {one:6.1f} s   ({one / runs:.2f} s per run)")
-        print(f"  --jobs 2 (local Dask, 2 workers): {two:6.1f} s   ratio {two / one:.2f} (goal <= 0.6); the same rows: {same}")
+        print(f"  --jobs 1 (in this process): {one:6.1f} s   ({one / runs:.2f} s per run; CPU {cpu_one:.1f} s = "
+              f"{cpu_one / one:.2f} cores on average)")
+        print(f"  --jobs 2 (local Dask, 2 workers): {two:6.1f} s   ratio {two / one:.2f} (goal <= 0.6); CPU {cpu_two:.1f} s = "
+              f"{cpu_two / two:.2f} cores on average; the same rows: {same}")
 
         startup, row_s, overhead_s, n = dask_overhead(sorted(folder.glob("*.toml")), args.seeds)
         print(f"Dask per row, one worker, {n} rows: compute {row_s:.2f} s, overhead {1000 * overhead_s:.1f} ms = "
@@ -103,7 +114,7 @@ def main() -> None:
         for name in SWEEP_SCENARIOS:
             (sweep / f"{name}.toml").write_bytes((BUNDLED / f"{name}.toml").read_bytes())
         sets = [a for s in SWEEP_SETTINGS for a in ("--set", s)]
-        wall, code = cli("sweep", str(sweep), *sets, "--seeds", "2", "--out", f"{tmp}/sw", "--jobs", "2")
+        wall, _cpu, code = cli("sweep", str(sweep), *sets, "--seeds", "2", "--out", f"{tmp}/sw", "--jobs", "2")
         result = json.loads(Path(tmp, "sw", "sweep.json").read_text())
         print(f"sweep {' '.join(SWEEP_SETTINGS)} × {len(SWEEP_SCENARIOS)} scenarios × 2 seeds, --jobs 2: {wall:.1f} s for "
               f"{result['finished_runs']} runs ({len(result['combinations'])} combinations guarded + the unguarded car once), exit {code}")
