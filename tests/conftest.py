@@ -49,3 +49,19 @@ def write_rules(tmp_path: Path):
         return path
 
     return write
+
+
+@pytest.fixture(scope="session")
+def dask_cluster(tmp_path_factory: pytest.TempPathFactory):
+    """A real ``dask scheduler`` and two ``dask worker --nthreads 1`` processes on 127.0.0.1 (random free ports), started
+    once per test session: a start costs seconds (each worker imports fearguard on its first row), so the tests that run
+    plans on Dask share it; a test that kills a worker starts another before it ends. Every process ends with the session."""
+    pytest.importorskip("distributed", reason="Dask is not installed (pip install 'fearguard[cluster]')")
+    from tests.drive.dask_cluster import DaskProcesses
+
+    processes = DaskProcesses(tmp_path_factory.mktemp("dask"))
+    try:
+        processes.add_workers(2)
+        yield processes
+    finally:
+        processes.close()

@@ -46,6 +46,12 @@ PARSE_TIME = [  # argparse rejects these: usage error, exit 2, "argument --NAME:
     (["duckietown-suite", "--seeds", "-1"], "--seeds", "must be >= 0"),
     (["duckietown-suite", "--rand-seconds", "0"], "--rand-seconds", "must be > 0"),
     (["duckietown-suite", "--jobs", "0"], "--jobs", "must be >= 1"),
+    (["suite", "--jobs", "0"], "--jobs", "must be >= 1"),
+    (["suite", "--jobs", "two"], "--jobs", "not a whole number"),
+    (["suite", "--scheduler", "http://10.0.0.5:8786"], "--scheduler", "is not a Dask scheduler address"),
+    (["suite", "--scheduler", "tcp://10.0.0.5:99999"], "--scheduler", "such as tcp://10.0.0.5:8786"),
+    (["suite", "--jobs", "2", "--scheduler", "tcp://10.0.0.5:8786"], "--scheduler", "not allowed with argument --jobs"),
+    (["duckietown-suite", "--scheduler", "two words"], "--scheduler", "is not a Dask scheduler address"),
 ]
 
 

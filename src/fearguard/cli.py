@@ -1,5 +1,5 @@
-"""Command line: ``demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``scenarios``, ``suite``, ``verify``,
-``duckietown``.
+"""Command line: ``demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``scenarios``, ``suite``, ``sweep``,
+``verify``, ``duckietown``, ``duckietown-suite``.
 
 A thin layer: it parses arguments, calls the library, prints, and maps errors to exit codes
 (0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr, 130 / 143 interrupted by SIGINT /
@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from fearguard.observation import Lead
     from fearguard.supervisor import FearGuard
 
-FRAME_LOOPS = ("replay", "run", "suite")  # commands that finish the current frame on a signal
+FRAME_LOOPS = ("replay", "run", "suite", "sweep")  # commands that finish the current frame on a signal
 MCAP_HELP = "also write run.mcap for Foxglove: the annotated image, the command, the cues and the reasons (the ros extra)"
 VIDEO_HELP = "also write the annotated video (annotated.mp4, H.264; annotated.avi, MJPG, without the video extra)"
 OUT_ROOT = Path("fearguard-out")  # where a command writes when --out is not given: OUT_ROOT/COMMAND-LABEL-YYYYmmdd-HHMMSS
@@ -196,14 +196,22 @@ class _Progress:
         self._bar: Any = None
         self._live = sys.stderr.isatty()
         try:
+            import rich.progress
             from rich.console import Console
-            from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeRemainingColumn
         except ModuleNotFoundError:  # the core install has no rich: the plain line below
             return
         console = Console(stderr=True)
-        self._bar = Progress(TextColumn(label), BarColumn(), MofNCompleteColumn(), TextColumn("{task.fields[rate]}"),
-                             TimeRemainingColumn(), console=console, disable=not console.is_terminal, transient=False)
-        self._task = self._bar.add_task(label, total=None, rate="")
+        self._bar = rich.progress.Progress(*self._columns(rich.progress), console=console, disable=not console.is_terminal,
+                                           transient=False)
+        self._task = self._bar.add_task(label, total=None, **self._fields())
+
+    def _columns(self, p: Any) -> list[Any]:
+        """The bar's columns (``p``: rich.progress)."""
+        return [p.TextColumn(self._label), p.BarColumn(), p.MofNCompleteColumn(), p.TextColumn("{task.fields[rate]}"),
+                p.TimeRemainingColumn()]
+
+    def _fields(self) -> dict[str, Any]:
+        return {"rate": ""}
 
     def __enter__(self) -> _Progress:
         if self._bar is not None:
@@ -231,6 +239,62 @@ class _Progress:
             print(f"\r{self._label}: {done}{f'/{total}' if total else ''} {self._unit} {rate}   ", end="", file=sys.stderr, flush=True)
 
 
+class _RunProgress(_Progress):
+    """Progress over the runs of a plan (suite, sweep, fleet replay, duckietown-suite): runs done of the plan, failures,
+    the time left and the workers running them; without a terminal a line per finished run, naming it and how it went.
+    Resumed runs count as done; the time left is estimated from the runs finished in this session."""
+
+    def __init__(self, label: str, executor: Any = None, *, line: Callable[[dict], str], failed: Callable[[dict], bool]) -> None:
+        self._executor, self._line, self._failed = executor, line, failed
+        self._failures, self._last, self._first_done = 0, "", None
+        super().__init__(label, unit="runs")
+
+    def _columns(self, p: Any) -> list[Any]:
+        return [p.TextColumn(self._label), p.BarColumn(), p.MofNCompleteColumn(), p.TextColumn("{task.fields[failed]} failed"),
+                p.TextColumn("{task.fields[workers]}"), p.TimeRemainingColumn()]
+
+    def _fields(self) -> dict[str, Any]:
+        return {"failed": 0, "workers": ""}
+
+    @property
+    def workers(self) -> str:
+        """The workers running the rows: the cluster's, or this process."""
+        n = int(getattr(self._executor, "workers", 1))
+        return f"{n} worker{'s' if n != 1 else ''}"
+
+    def row(self, row: dict) -> None:
+        """A run finished (``run_plan``'s on_row): its line and whether it failed; ``update`` follows."""
+        self._failures += bool(self._failed(row))
+        self._last = self._line(row)
+
+    def update(self, done: int, total: int | None) -> None:
+        """``run_plan``'s on_progress: runs done (resumed ones included) of the plan's."""
+        elapsed = time.perf_counter() - self._start
+        first = self._first_done is None
+        if first:
+            self._first_done = done
+        new = done - (self._first_done or 0)
+        if self._bar is not None and self._live:
+            if first:  # the resumed runs are no speed: the time left counts from here
+                self._bar.reset(self._task, total=total, completed=done)
+            self._bar.update(self._task, completed=done, total=total, failed=self._failures, workers=self.workers)
+            return
+        left = f", {_duration(elapsed / new * ((total or done) - done))} left" if new and done != total else ""
+        text = f"{self._label}: {done}/{total} runs, {self._failures} failed, {self.workers}{left}"
+        if self._live:
+            self._drawn = elapsed
+            print(f"\r{text}   ", end="", file=sys.stderr, flush=True)
+        elif new or done:
+            print(text + (f": {self._last}" if new else " (resumed)"), file=sys.stderr, flush=True)
+
+
+def _duration(seconds: float) -> str:
+    """A time left for a person: 45 s, 12 min, 2.5 h."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    return f"{seconds / 60:.0f} min" if seconds < 5400 else f"{seconds / 3600:.1f} h"
+
+
 def cmd_replay(args: argparse.Namespace) -> int:
     """A recorded drive → log.jsonl, summary.json, timeline.png (and annotated.mp4): where and why fear rose."""
     from fearguard.files.steer_import import resolve_steer
@@ -238,6 +302,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from fearguard.replay.run import ReplayOptions, replay
     from fearguard.vehicle import resolve_vehicle
 
+    if len(args.recordings) > 1:
+        return _replay_fleet(args)
+    args.recording = args.recordings[0]
     steer, _ = resolve_steer(args.steer)
     options = ReplayOptions(
         rules=args.rules, camera=args.camera, sensor_log=args.sensor_log, strict=args.strict, no_ultrasonic=args.no_ultrasonic,
@@ -250,6 +317,54 @@ def cmd_replay(args: argparse.Namespace) -> int:
         result = replay(args.recording, out, options, on_frame=progress.update, stop=args.stop)
     _print_replay_summary(result.summary, result.out_dir)
     return _interrupted_exit(args.stop) if result.interrupted else 0
+
+
+def _replay_fleet(args: argparse.Namespace) -> int:
+    """Several recordings → one folder each under --out, replays.md / replays.json: the fleet as a plan of replay rows
+    (``replay/fleet.py``), one after the other or on Dask; exit 1 if a recording could not be replayed."""
+    from fearguard.camera import load_camera
+    from fearguard.drive.suite import run_plan
+    from fearguard.files.steer_import import resolve_steer
+    from fearguard.fuzzy.loader import load_rules
+    from fearguard.outputs.recorder import write_json
+    from fearguard.replay import fleet
+    from fearguard.vehicle import resolve_vehicle
+
+    if args.sensor_log is not None:
+        raise FearguardError("replay: --sensor-log belongs to one recording; replay a fleet of recordings that carry their own "
+                             "sensors (ROS bags, Donkey tubs), or each recording with its log on its own")
+    executor = _executor(args)
+    load_rules(args.rules), resolve_vehicle(args.vehicle), resolve_steer(args.steer)  # a bad option fails before any replay
+    if args.camera:
+        load_camera(args.camera)
+    out = Path(args.out) if args.out else _new_out("replay", f"fleet-{len(args.recordings)}")
+    out.mkdir(parents=True, exist_ok=True)
+    options = {"rules": args.rules, "camera": args.camera, "strict": args.strict, "no_ultrasonic": args.no_ultrasonic,
+               "qr_localisation": args.qr_localisation, "speed_mps": args.speed_mps, "fps": args.fps, "start": args.from_,
+               "stop": args.to, "every": args.every, "video": args.video, "plots": not args.no_plots, "mcap": args.mcap,
+               "vehicle": args.vehicle, "steer": args.steer,
+               "topics": {"image": args.image_topic, "range": args.range_topic, "speed": args.speed_topic, "qr": args.qr_topic}}
+    specs = fleet.plan(args.recordings, out, options)
+    print(f"replay: {len(specs)} recordings → {out}{_on(executor)}", file=sys.stderr)
+    with _RunProgress("replay", executor, line=_fleet_line, failed=lambda r: "error" in r) as bar:
+        result = run_plan(specs, runs_log=out / "runs.jsonl", resume=args.resume, stop=args.stop, executor=executor,
+                          on_row=bar.row, on_progress=bar.update)
+    data, markdown = fleet.merge(result.rows)
+    (out / "replays.md").write_text(markdown, encoding="utf-8")
+    write_json(out / "replays.json", {"interrupted": result.interrupted, "planned": result.planned, **data})
+    print(markdown)
+    print(f"wrote {out}/replays.md, replays.json, runs.jsonl and a folder per recording ({len(result.rows)} of {result.planned})")
+    if result.interrupted:
+        print(f"interrupted by {result.stopped_by}: run the same command with --resume to replay the rest")
+        return _interrupted_exit(args.stop)
+    return 1 if data["totals"]["failed"] else 0
+
+
+def _fleet_line(row: dict) -> str:
+    if "error" in row:
+        return f"{row['recording']}: {row['error']}"
+    emergency = row["mode_s"]["EMERGENCY"]
+    return f"{row['recording']}: {row['frames']} frames, EMERGENCY {emergency:.1f} s, {row['emergency_episodes']} episode(s)"
 
 
 def _interrupted_exit(stop: StopSignal) -> int:
@@ -338,17 +453,18 @@ def cmd_suite(args: argparse.Namespace) -> int:
     """
     from fearguard.outputs.recorder import write_json
     from fearguard.sim.loop import CONTROLLERS
-    from fearguard.sim.suite import run_suite, scenario_files, suite_markdown, suite_table, suite_totals
+    from fearguard.sim.suite import row_line, run_suite, scenario_files, suite_markdown, suite_table, suite_totals
 
     files = scenario_files(args.folder)
     if not files:
         raise FearguardError(f"suite: no *.toml scenarios in {args.folder}; give a folder of scenario files")
+    executor = _executor(args)  # before anything is written: without Dask, a one-line error
     out = Path(args.out) if args.out else _latest_suite() if args.resume else _new_out("suite", f"{args.seeds}seeds")
     out.mkdir(parents=True, exist_ok=True)
-    print(f"suite: {len(files)} scenarios × {args.seeds} seed(s) × {', '.join(CONTROLLERS)} → {out}", file=sys.stderr)
-    with _Progress("suite", unit="runs") as bar:
+    print(f"suite: {len(files)} scenarios × {args.seeds} seed(s) × {', '.join(CONTROLLERS)} → {out}{_on(executor)}", file=sys.stderr)
+    with _RunProgress("suite", executor, line=row_line, failed=lambda r: r["controller"] == "guarded" and not r["passed"]) as bar:
         progress = run_suite(files, args.seeds, on_run=print if args.verbose else None, runs_log=out / "runs.jsonl",
-                             resume=args.resume, stop=args.stop, on_progress=bar.update)
+                             resume=args.resume, stop=args.stop, on_progress=bar.update, executor=executor, on_row=bar.row)
     rows = progress.rows
     markdown = suite_markdown(rows)
     (out / "suite.md").write_text(markdown, encoding="utf-8")
@@ -366,6 +482,71 @@ def cmd_suite(args: argparse.Namespace) -> int:
         print(f"interrupted by {progress.stopped_by}: the table holds the finished runs; run the same command with --resume to go on")
         return _interrupted_exit(args.stop)
     return 0 if all(r["passed"] for r in rows if r["controller"] == "guarded") else 1
+
+
+def _executor(args: argparse.Namespace) -> Any:
+    """The executor ``--jobs``/``--scheduler`` ask for (None: the in-process loop; Dask is imported only otherwise)."""
+    if args.jobs == 1 and args.scheduler is None:
+        return None
+    from fearguard.drive.cluster import executor_for
+
+    return executor_for(args.jobs, args.scheduler)
+
+
+def _on(executor: Any) -> str:
+    """`` on a local Dask cluster of 2 worker processes`` for a command's first line ('' in this process)."""
+    return f" on {executor.where}" if executor is not None else ""
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """Numbers of the rules and the vehicle × scenarios × seeds, guarded, against the unguarded car → sweep.md, sweep.json,
+    sweep.png; exit 1 if no combination kept zero collisions and zero lane departures."""
+    from fearguard.drive.suite import run_plan
+    from fearguard.outputs.recorder import write_json
+    from fearguard.sim import sweep
+    from fearguard.sim.suite import scenario_files
+
+    files = scenario_files(args.folder)
+    specs = sweep.plan(files, args.seeds, args.set)  # every combination checked against every scenario's files first
+    executor = _executor(args)
+    out = Path(args.out) if args.out else _new_out("sweep", f"{len(specs)}runs")
+    out.mkdir(parents=True, exist_ok=True)
+    combos = len(sweep.combinations(args.set))
+    print(f"sweep: {combos} combination(s) × {len(files)} scenarios × {args.seeds} seed(s), guarded, and the unguarded car once "
+          f"({len(specs)} runs) → {out}{_on(executor)}", file=sys.stderr)
+    with _RunProgress("sweep", executor, line=sweep.row_line, failed=lambda r: r["controller"] == "guarded"
+                      and bool(r["collisions"] or r["lane_departures"])) as bar:
+        result = run_plan(specs, runs_log=out / "runs.jsonl", resume=args.resume, stop=args.stop, executor=executor,
+                          on_row=bar.row, on_progress=bar.update)
+    table, reference = sweep.merge(result.rows), sweep.unguarded_totals(result.rows)
+    markdown = sweep.sweep_markdown(table, reference)
+    (out / "sweep.md").write_text(markdown, encoding="utf-8")
+    write_json(out / "sweep.json", {"interrupted": result.interrupted, "planned_runs": result.planned, "finished_runs": len(result.rows),
+                                    "settings": {s.key: list(s.values) for s in args.set}, "combinations": table,
+                                    "safe_ranked": [t["combination"] for t in sweep.ranked_safe(table)], "unguarded": reference})
+    plotted = ""
+    if table:
+        try:
+            sweep.sweep_figure(table, reference, title=out.name).savefig(out / "sweep.png", dpi=90)
+            plotted = ", sweep.png"
+        except ModuleNotFoundError as exc:  # the core install has no matplotlib
+            print(f"warning: sweep.png needs {exc.name}: pip install 'fearguard[desktop]'", file=sys.stderr)
+    print(markdown)
+    print(f"wrote {out}/runs.jsonl, sweep.md, sweep.json{plotted} ({len(result.rows)} of {result.planned} runs)")
+    if result.interrupted:
+        print(f"interrupted by {result.stopped_by}: the table holds the finished runs; run the same command with --resume to go on")
+        return _interrupted_exit(args.stop)
+    return 0 if sweep.ranked_safe(table) else 1
+
+
+def _setting(text: str) -> Any:
+    """An argparse type for ``sweep --set KEY=V1,V2``: a known dotted key and TOML values (exit 2 with "did you mean")."""
+    from fearguard.sim.sweep import parse_setting
+
+    try:
+        return parse_setting(text)
+    except FearguardError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def _latest_suite() -> Path:
@@ -439,9 +620,16 @@ def cmd_duckietown_suite(args: argparse.Namespace) -> int:
     """The development maps guarded / unguarded / expert, obstacles, domain randomisation → suite.md, suite.json."""
     from fearguard.worlds.duckietown.suite import run_suite
 
+    executor = _executor(args)
     out = args.out or _new_out("duckietown-suite", f"{args.seeds}seeds")
-    table = run_suite(out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds, jobs=args.jobs,
-                      on_run=lambda line: print(line, flush=True), resume=args.resume)
+    print(f"duckietown-suite → {out}{_on(executor)}", file=sys.stderr)
+    def failed(r: dict) -> bool:
+        return r["controller"] == "guarded" and bool(r["departures"] or r["collisions"] or r["invalid_pose"])
+
+    with _RunProgress("duckietown-suite", executor, line=lambda r: f"{r['run']} {r['controller']}", failed=failed) as bar:
+        table = run_suite(out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds,
+                          executor=executor, on_run=lambda line: print(line, flush=True), resume=args.resume,
+                          on_progress=bar.update, on_row=bar.row)
     print(table)
     print(f"wrote {out}/runs.jsonl, suite.md, suite.json")
     return 0
@@ -491,6 +679,24 @@ def _position(text: str) -> str:
     if not position_form_ok(text):
         raise argparse.ArgumentTypeError(f"{text!r}: {POSITION_FORMS}")
     return text
+
+
+def _scheduler(text: str) -> str:
+    """An argparse type for ``--scheduler``: a Dask scheduler's address (whether it answers is checked when the run starts)."""
+    from fearguard.drive.cluster import ADDRESS_FORM, scheduler_address_ok
+
+    if not scheduler_address_ok(text):
+        raise argparse.ArgumentTypeError(f"{text!r} is not {ADDRESS_FORM}")
+    return text.strip()
+
+
+def _batch_options(parser: argparse.ArgumentParser, what: str) -> None:
+    """``--jobs N`` / ``--scheduler ADDRESS`` (one or the other) of every command that runs a plan of runs."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--jobs", type=_count(1), default=1, help=f"{what} at a time on a local Dask cluster of N single-threaded "
+                       "worker processes (default 1: one after the other in this process, no Dask); needs fearguard[cluster]")
+    where.add_argument("--scheduler", type=_scheduler, default=None, metavar="ADDRESS",
+                       help=f"run the {what} on the workers of a running Dask scheduler, e.g. tcp://10.0.0.5:8786 (docs/cluster.md)")
 
 
 def _folder(text: str) -> str:
@@ -574,10 +780,12 @@ def build_parser() -> argparse.ArgumentParser:
     calibrate.add_argument("--out", default=None, help="camera file to write (TOML), e.g. camera.toml "
                            "(default: camera.toml in a new folder fearguard-out/calibrate-...-TIMESTAMP)")
     calibrate.set_defaults(func=cmd_calibrate)
-    rp = sub.add_parser("replay", help="a recorded drive (video, image folder, Donkey tub) through the supervisor, open loop")
-    rp.add_argument("recording", help="video file, folder of images, or Donkey Car tub folder")
+    rp = sub.add_parser("replay", help="recorded drives (video, image folder, Donkey tub, ROS bag) through the supervisor, open loop")
+    rp.add_argument("recordings", nargs="+", metavar="recording",
+                    help="video file, folder of images, Donkey Car tub folder or ROS bag; several: a fleet, a folder each under --out")
     rp.add_argument("--out", type=_out_folder, default=None,
-                    help="output folder (log.jsonl, summary.json, timeline.png, the video) " + OUT_HELP % "replay")
+                    help="output folder (log.jsonl, summary.json, timeline.png, the video; a fleet: a folder per recording, "
+                    "replays.md, replays.json) " + OUT_HELP % "replay")
     rp.add_argument("--vehicle", default=None, help="vehicle preset (" + ", ".join(PRESETS) + ") or vehicle.toml "
                     "(default: VehicleLimits(), a 1:10 car capped at 2 m/s); the range sensor is what the sensor log has")
     rp.add_argument("--steer", default=None, help="your steering function module:function, frame -> degrees "
@@ -601,6 +809,8 @@ def build_parser() -> argparse.ArgumentParser:
                        ("qr", "QR payloads (std_msgs/String)")):
         rp.add_argument(f"--{role}-topic", default=None, help=f"a ROS bag's topic for {what} (default: the only one there is"
                         + ("" if role == "image" else "; none: ignore it") + ")")
+    rp.add_argument("--resume", action="store_true", help="a fleet: skip the recordings already in OUT/runs.jsonl")
+    _batch_options(rp, "recordings")
     rp.set_defaults(func=cmd_replay)
     run = sub.add_parser("run", help="one scenario closed loop: rendered frames → perception → supervisor → car")
     run.add_argument("scenario", help="a bundled scenario's name (e.g. night; `fearguard scenarios` lists them) or a scenario file")
@@ -620,7 +830,19 @@ def build_parser() -> argparse.ArgumentParser:
     suite.add_argument("--resume", action="store_true", help="skip the runs already in OUT/runs.jsonl (after an interruption; "
                        "without --out: the newest fearguard-out/suite-* folder)")
     suite.add_argument("--verbose", action="store_true", help="print each run as it finishes")
+    _batch_options(suite, "runs")
     suite.set_defaults(func=cmd_suite)
+    sw = sub.add_parser("sweep", help="numbers of the rules and the vehicle × scenarios × seeds: safety against progress")
+    sw.add_argument("folder", nargs="?", type=_folder, default=None, help="folder of scenario files (default: the bundled library)")
+    sw.add_argument("--set", type=_setting, action="append", required=True, metavar="KEY=V1,V2",
+                    help="values to try for a number of the rule file (policy.hold_s=1,2,3) or the vehicle "
+                    "(vehicle.max_speed_mps=1.5,2); repeat for more keys: every combination runs")
+    sw.add_argument("--seeds", type=_count(1), default=3, help="seeds per scenario, >= 1 (default 3)")
+    sw.add_argument("--out", type=_out_folder, default=None, help="output folder for runs.jsonl, sweep.md, sweep.json, sweep.png "
+                    + OUT_HELP % "sweep")
+    sw.add_argument("--resume", action="store_true", help="skip the runs already in OUT/runs.jsonl (after an interruption)")
+    _batch_options(sw, "runs")
+    sw.set_defaults(func=cmd_sweep)
     listing = sub.add_parser("scenarios", help="list the bundled scenarios (name and what each tests)")
     listing.add_argument("folder", nargs="?", type=_folder, default=None,
                          help="another folder of scenario files (default: the bundled library)")
@@ -665,7 +887,7 @@ def build_parser() -> argparse.ArgumentParser:
     dts.add_argument("--maps", nargs="*", default=None, help="lane maps (default: loop_empty small_loop zigzag_dists straight_road)")
     dts.add_argument("--rand-seconds", type=_number(above=0.0), default=None, help="duration of each randomised drive (default: --seconds)")
     dts.add_argument("--resume", action="store_true", help="skip the drives already in OUT/runs.jsonl (after an interruption)")
-    dts.add_argument("--jobs", type=_count(1), default=1, help="drives at a time, each in its own process (default 1)")
+    _batch_options(dts, "drives")
     dts.set_defaults(func=cmd_duckietown_suite)
     return parser
 

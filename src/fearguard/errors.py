@@ -7,6 +7,8 @@
     │   ├── SetupError              a vehicle, preset or steering function the testing kit cannot use (testing/subject.py)
     │   ├── SimulatorMissing        gym-duckietown is not installed in this environment (worlds/duckietown/world.py)
     │   ├── MapError                a map name or start the simulator does not know (worlds/duckietown/world.py)
+    │   ├── ClusterError            Dask is not installed, or its scheduler cannot be reached (drive/cluster.py)
+    │   ├── SweepError              a sweep's --set that names no number of the rules or the vehicle (sim/sweep.py)
     │   └── FileError               a file is wrong: ``FileError(path, where, problem)`` → "path, where: problem"
     │       ├── RuleError           a rule-base file and its [policy] table (fuzzy/loader.py)
     │       ├── CameraError         camera.toml (camera.py)
@@ -143,3 +145,11 @@ class SimulatorMissing(FearguardError):
 
 class MapError(FearguardError):
     """A map name or start the simulator does not know."""
+
+
+class ClusterError(FearguardError):
+    """``--jobs N``/``--scheduler`` cannot run: Dask is not installed, or the scheduler does not answer."""
+
+
+class SweepError(FearguardError):
+    """A sweep's ``--set KEY=V1,V2`` names no number of the rule file or the vehicle, or gives no usable values."""

@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
+from fearguard.drive.cluster import DaskExecutor
 from fearguard.drive.interrupt import StopSignal
 from fearguard.drive.plan import RunSpec, row_key, run_row, runner
-from fearguard.drive.suite import finished_rows, process_pool, run_plan
+from fearguard.drive.suite import finished_rows, run_plan
 from fearguard.sim.scenario import BUNDLED
 from fearguard.sim.suite import plan
 
@@ -32,9 +33,10 @@ def _without_spec(row: dict) -> dict:
     return {k: v for k, v in row.items() if k != "spec"}
 
 
-def test_serial_and_worker_processes_give_the_same_rows_in_plan_order(specs: list[RunSpec], tmp_path: Path) -> None:
+def test_serial_and_dask_workers_give_the_same_rows_in_plan_order(specs: list[RunSpec], tmp_path: Path, dask_cluster) -> None:
+    """The session's real scheduler and two workers (tests/conftest.py); a local cluster: tests/drive/test_cluster.py."""
     serial = run_plan(specs, runs_log=tmp_path / "a.jsonl")
-    pooled = run_plan(specs, runs_log=tmp_path / "b.jsonl", executor=process_pool(2))
+    pooled = run_plan(specs, runs_log=tmp_path / "b.jsonl", executor=DaskExecutor(scheduler=dask_cluster.address))
     assert [r["spec"] for r in serial.rows] == [s.to_json() for s in specs] == [r["spec"] for r in pooled.rows]
     assert serial.rows == pooled.rows and len(serial.rows) == 8 and not serial.interrupted
     assert sorted(map(json.dumps, finished_rows(tmp_path / "b.jsonl"))) == sorted(map(json.dumps, serial.rows))
@@ -71,7 +73,7 @@ def test_a_row_names_its_run_and_old_rows_are_recognised() -> None:
     assert row_key({"spec": spec.to_json()}) == ("sim", "clear_straight", "guarded", 3)
     assert row_key({"scenario": "night", "seed": 2, "controller": "aeb", "passed": True}) == ("sim", "night", "aeb", 2)  # before plans
     assert row_key({"spec": {"world": "sim"}}) is None and row_key({"frames": 3}) is None
-    with pytest.raises(ValueError, match="unknown world 'carla'; known: sim, duckietown"):
+    with pytest.raises(ValueError, match="unknown world 'carla'; known: sim, duckietown, replay"):
         runner("carla")
     row = run_row(RunSpec("sim", "clear_straight", "unguarded", 1, {"file": str(SHORT)}))
     assert row["spec"]["controller"] == "unguarded" and row["scenario"] == "clear_straight" and row["collisions"] == 0

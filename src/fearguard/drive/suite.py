@@ -5,15 +5,15 @@ its tables. Rows come back in plan order whatever order they finished in. An int
 keeps every finished row in ``runs.jsonl``, a valid JSON Lines file; ``resume`` runs only the rows not in it. A run cut
 short by a stop is not a result: it is left out, and the suite stops there.
 
-``executor`` runs the rows: None runs them one after the other in this process; ``process_pool(jobs)`` in worker
-processes on this machine (each row is independent and deterministic: the rows are the same however they ran).
+``executor`` runs the rows: None runs them one after the other in this process; ``cluster.DaskExecutor`` on Dask's
+workers, local or on other machines (each row is independent and deterministic: the rows are the same however they
+ran). An executor is a generator: closing it (the plan stopped, Ctrl-C) cancels what it still runs.
 """
 
 from __future__ import annotations
 
-import multiprocessing
-from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from collections.abc import Callable, Generator, Sequence
+from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,7 +23,7 @@ from fearguard.drive.plan import RunSpec, row_key, run_row
 from fearguard.outputs.report import JsonlLog, read_jsonl
 
 Row = dict[str, Any]
-Executor = Callable[[Sequence[RunSpec], StopSignal | None], Iterator[tuple[int, Row]]]  # (index, row) of each spec, any order
+Executor = Callable[[Sequence[RunSpec], StopSignal | None], Generator[tuple[int, Row], None, None]]  # (index, row) of each spec, any order
 
 
 @dataclass(frozen=True)
@@ -37,25 +37,10 @@ class PlanResult:
     stopped_by: str | None = None
 
 
-def serial(specs: Sequence[RunSpec], stop: StopSignal | None = None) -> Iterator[tuple[int, Row]]:
+def serial(specs: Sequence[RunSpec], stop: StopSignal | None = None) -> Generator[tuple[int, Row], None, None]:
     """One row after the other, in this process (a stop signal reaches the run under way: it ends after its frame)."""
     for i, spec in enumerate(specs):
         yield i, run_row(spec, stop)
-
-
-def process_pool(jobs: int) -> Executor:
-    """``jobs`` rows at a time, each in its own worker process (spawned: a simulator's global state stays its own)."""
-
-    def execute(specs: Sequence[RunSpec], stop: StopSignal | None = None) -> Iterator[tuple[int, Row]]:
-        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"))
-        try:
-            futures = {pool.submit(run_row, spec): i for i, spec in enumerate(specs)}
-            for future in as_completed(futures):
-                yield futures[future], future.result()
-        finally:  # a stop, Ctrl-C or a failed row: the rows not started are cancelled
-            pool.shutdown(wait=True, cancel_futures=True)
-
-    return execute
 
 
 def finished_rows(path: Path | None) -> list[Row]:
@@ -111,10 +96,11 @@ def _run_rows(todo: Sequence[tuple[int, RunSpec]], executor: Executor, stop: Sto
     """Run the rows still to do, keeping each as it arrives; True when a run was cut short (its row is not kept)."""
     if stop or not todo:
         return False
-    for k, row in executor([spec for _, spec in todo], stop):
-        if row.get("interrupted"):
-            return True
-        keep(todo[k][0], row)
-        if stop:
-            return False
+    with closing(executor([spec for _, spec in todo], stop)) as rows:  # closed at once on the way out: nothing left running
+        for k, row in rows:
+            if row.get("interrupted"):
+                return True
+            keep(todo[k][0], row)
+            if stop:
+                return False
     return False

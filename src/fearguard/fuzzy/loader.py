@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import fields
+from dataclasses import asdict, fields
 from itertools import pairwise
 from pathlib import Path
 from typing import Any
@@ -23,7 +23,7 @@ import numpy as np
 from fearguard.cues import CUE_NAMES, CUE_SPECS
 from fearguard.errors import FearguardError, RuleError
 from fearguard.fear import LEVEL_NAMES, Cause, FearLevel
-from fearguard.files.reader import Table, TomlSource, number_list, read_toml, suggestion
+from fearguard.files.reader import ErrorKind, Table, TomlSource, number_list, read_toml, suggestion
 from fearguard.fuzzy.membership import SHAPES, Shape, universe_grid
 from fearguard.fuzzy.model import Group, Rule, Variable
 from fearguard.fuzzy.rule_text import RuleSyntaxError, atoms, parse_rule
@@ -254,3 +254,10 @@ def policy_from_table(src: TomlSource, data: object, key_path: str = "policy") -
         if not ok:
             raise t.fail(key, f"{problem}, got {getattr(cfg, key)}")
     return cfg
+
+
+def policy_with(policy: PolicyConfig, changes: Mapping[str, Any], source: str, error: ErrorKind = RuleError) -> PolicyConfig:
+    """``policy`` with some of its numbers changed (a sweep's ``--set policy.hold_s=3``), validated as a rule file's
+    ``[policy]`` table is: an unknown key, a wrong type or a broken threshold order is ``error`` naming ``source``."""
+    table = {**asdict(policy), "speed_fraction": dict(zip(LEVEL_NAMES, policy.speed_fraction, strict=True)), **changes}
+    return policy_from_table(TomlSource(source, "", error), table, "policy")

@@ -11,7 +11,7 @@ identical log, byte for byte (nothing reads the wall clock into the log). What a
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -22,7 +22,7 @@ from fearguard.drive.interrupt import StopSignal
 from fearguard.drive.loop import run
 from fearguard.drive.world import Controller, Decision, Outcome, Sensed
 from fearguard.errors import EstimatorFault
-from fearguard.fuzzy.loader import load_rules
+from fearguard.fuzzy.loader import load_rules, policy_with
 from fearguard.fuzzy.rulebase import RuleBase
 from fearguard.observation import Observation
 from fearguard.outputs.recorder import Recorder, Trace
@@ -151,9 +151,12 @@ def scenario_controller(name: str, scenario: Scenario, guard: FearGuard, estimat
 def run_scenario(
     scenario: Scenario, seed: int | None = None, controller: str = "guarded", out_dir: Path | None = None, *, video: bool = False,
     on_frame: Callable[[int, int], None] | None = None, stop: StopSignal | None = None, video_kind: str | None = None,
-    mcap: bool = False,
+    mcap: bool = False, policy: Mapping[str, Any] | None = None, vehicle: Mapping[str, Any] | None = None,
 ) -> RunResult:
     """Run one scenario closed loop; with ``out_dir``, record log.jsonl (flushed per frame) and, if asked, the video.
+
+    ``policy`` / ``vehicle`` change numbers of the rule file's [policy] table and of the supervisor's VehicleLimits (a
+    sweep's ``--set``), validated as the files are (a RuleError / ValueError otherwise); the car's physics stay the scenario's.
 
     ``stop`` (from ``interrupt.stop_on_signals``) ends the run after the current frame; so does a
     KeyboardInterrupt. Either way the result says ``interrupted`` and keeps every frame recorded.
@@ -167,7 +170,11 @@ def run_scenario(
     limits = scenario.vehicle.limits
     if scenario.sensors is not None:  # the range sensor the scenario's car carries (HC-SR04 on a model car, radar-like on a road car)
         limits = replace(limits, ultrasonic_min_range_m=scenario.sensors.min_range_m, ultrasonic_max_range_m=scenario.sensors.max_range_m)
-    guard = FearGuard(estimator, rules=load_rules(scenario.rules_path), vehicle=limits, camera=camera)
+    limits = replace(limits, **vehicle) if vehicle else limits
+    rules = load_rules(scenario.rules_path)
+    if policy:
+        rules = replace(rules, policy=policy_with(rules.policy, policy, f"{scenario.path}: the changed [policy] of {rules.path}"))
+    guard = FearGuard(estimator, rules=rules, vehicle=limits, camera=camera)
     total = math.ceil(scenario.duration_s / world.world.dt_s)
     recorder = Recorder(out_dir, fps=scenario.camera.fps, video=video, video_kind=video_kind, mcap=mcap)
     ran = run(world, scenario_controller(controller, scenario, guard, estimator, limits), recorder, stop=stop, on_frame=on_frame,

@@ -20,7 +20,7 @@ import numpy as np
 
 from fearguard.drive.interrupt import StopSignal
 from fearguard.drive.plan import RunSpec
-from fearguard.drive.suite import PlanResult, run_plan
+from fearguard.drive.suite import Executor, PlanResult, run_plan
 from fearguard.errors import ScenarioError
 from fearguard.outputs.recorder import SUMMARY_NAME, write_json
 from fearguard.outputs.timeline import plot_timeline
@@ -161,6 +161,7 @@ def suite_row(result: RunResult, route_m: float | None = None) -> dict[str, Any]
         "distance_m": m.distance_m, "route_completion": (min(1.0, max(0.0, m.final_s_m / route_m))
                                                          if route_m and m.final_s_m is not None else None),
         "first_stop_t_s": stops[0] if stops else None, "emergency_entries": m.emergency_entries,
+        "emergency_s": m.time_in_mode_s.get("EMERGENCY", 0.0),
         "failed": [e.name for e in result.expectations if e.failed and e.outcome],
         "supervisor_failed": [e.name for e in result.expectations if e.failed and not e.outcome],
         "supervisor_checks": [e.name for e in result.expectations if not e.outcome],
@@ -169,39 +170,52 @@ def suite_row(result: RunResult, route_m: float | None = None) -> dict[str, Any]
 
 
 def plan(files: Iterable[Path], seeds: int, controllers: Sequence[str] = CONTROLLERS) -> list[RunSpec]:
-    """Every scenario × seed × controller, as rows: the seeds are each scenario's own seed and the ones after it."""
+    """Every scenario × seed × controller, as rows: the seeds are each scenario's own seed and the ones after it. The
+    scenario files are named by absolute path: a Dask worker started in another folder reads the same file."""
     if not (isinstance(seeds, int) and seeds >= 1):
         raise ValueError(f"seeds must be a whole number >= 1, got {seeds!r}")
     specs = []
     for path in files:
         scenario = load_scenario(path)
-        specs += [RunSpec("sim", scenario.name, c, scenario.seed + k, {"file": str(path)}) for k in range(seeds) for c in controllers]
+        file = str(Path(path).resolve())
+        specs += [RunSpec("sim", scenario.name, c, scenario.seed + k, {"file": file}) for k in range(seeds) for c in controllers]
     return specs
 
 
 def run_row(spec: RunSpec, stop: StopSignal | None = None) -> dict[str, Any]:
-    """One run of the simulator's suite, no per-frame files: its row (``"interrupted": true`` if ``stop`` cut it short)."""
+    """One run of the simulator's suite, no per-frame files: its row (``"interrupted": true`` if ``stop`` cut it short).
+    The options may change numbers of the rules (``"policy"``) and of the supervisor's vehicle (``"vehicle"``): a sweep."""
     scenario = load_scenario(spec.options["file"])
-    result = run_scenario(scenario, spec.seed, spec.controller, stop=stop)
+    result = run_scenario(scenario, spec.seed, spec.controller, stop=stop, policy=spec.options.get("policy"),
+                          vehicle=spec.options.get("vehicle"))
     if result.interrupted:
         return {"interrupted": True}
     return suite_row(result, Road(scenario.road).length_m)
 
 
+def row_line(row: dict[str, Any]) -> str:
+    """One finished run in a line: ``night seed 3 guarded: pass``."""
+    return f"{row['scenario']} seed {row['seed']} {row['controller']}: {'pass' if row['passed'] else 'FAIL'}"
+
+
 def run_suite(
     files: Iterable[Path], seeds: int, controllers: Sequence[str] = CONTROLLERS, on_run: Callable[[str], None] | None = None,
     runs_log: Path | None = None, resume: bool = False, stop: StopSignal | None = None,
-    on_progress: Callable[[int, int], None] | None = None,
+    on_progress: Callable[[int, int], None] | None = None, executor: Executor | None = None,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
 ) -> SuiteProgress:
     """Every scenario × seed × controller through the one suite (``drive/suite.py``): a row per finished run, appended to
-    ``runs_log`` as it finishes; ``resume`` skips the runs already there."""
+    ``runs_log`` as it finishes; ``resume`` skips the runs already there; ``executor`` runs the rows (None: in this
+    process, one after the other; ``cluster.DaskExecutor``: on Dask's workers)."""
 
     def said(row: dict[str, Any]) -> None:
+        if on_row is not None:
+            on_row(row)
         if on_run is not None:
-            on_run(f"{row['scenario']} seed {row['seed']} {row['controller']}: {'pass' if row['passed'] else 'FAIL'}")
+            on_run(row_line(row))
 
     return run_plan(plan(files, seeds, controllers), runs_log=runs_log, resume=resume, stop=stop, on_row=said,
-                    on_progress=on_progress)
+                    on_progress=on_progress, executor=executor)
 
 
 def suite_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:

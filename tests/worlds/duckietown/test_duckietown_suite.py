@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from fearguard.drive.plan import RunSpec
 from fearguard.worlds.duckietown.report import suite_markdown
 from fearguard.worlds.duckietown.suite import LANE_MAPS, criteria, merge, options_of, plan
@@ -47,3 +49,9 @@ def test_criteria_pass_and_fail_as_issue_14_says() -> None:
     assert "loop_empty rand 1" in checks[-1]["detail"] and "79–82 %" in checks[-1]["detail"]
     table = suite_markdown(rows)
     assert "stopped 0.10 m short (no supervisor), did not go on" in table and table.count("\n") == len(rows) + 2
+
+
+def test_drive_folders_are_absolute_so_a_worker_in_another_folder_writes_them_in_place(tmp_path, monkeypatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    specs = plan(5.0, 0, maps=["straight_road"], out_dir="out")
+    assert specs and all(Path(s.options["folder"]).parent == (tmp_path / "out").resolve() for s in specs)

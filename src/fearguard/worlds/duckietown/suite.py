@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from fearguard.drive.plan import RunSpec
-from fearguard.drive.suite import process_pool, run_plan
+from fearguard.drive.suite import Executor, run_plan
 from fearguard.outputs.report import json_value
 from fearguard.worlds.duckietown.drive import DriveOptions, drive
 from fearguard.worlds.duckietown.report import suite_markdown
@@ -40,7 +40,8 @@ OBSTACLE_RUNS = (  # (name, map, obstacle, range sensor, controller): 1 m ahead 
 def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None, rand_seconds: float | None = None,
          out_dir: str | Path | None = None) -> list[RunSpec]:
     """Every drive of the suite as rows, experts first (the other rows are compared to them); randomised drives last
-    ``rand_seconds``. ``out_dir``: each drive writes its folder (log, summary, plots) there."""
+    ``rand_seconds``. ``out_dir``: each drive writes its folder (log, summary, plots) there, named by absolute path (a
+    Dask worker started in another folder writes it in the same place)."""
     base = DriveOptions(seconds=seconds, plots=True)
     runs: list[tuple[str, DriveOptions]] = []
     for m in maps or LANE_MAPS:
@@ -52,7 +53,7 @@ def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None, rand_sec
         for c in ("expert", "guarded"):
             options = replace(base, map_name=DOMAIN_RAND_MAP, domain_rand=True, seed=seed, controller=c, seconds=rand_seconds or seconds)
             runs.append((f"{DOMAIN_RAND_MAP} rand {seed}", options))
-    folder = (lambda name, o: str(_folder(Path(out_dir), name, o))) if out_dir is not None else (lambda name, o: None)
+    folder = (lambda name, o: str(_folder(Path(out_dir).resolve(), name, o))) if out_dir is not None else (lambda name, o: None)
     return [RunSpec("duckietown", name, o.controller, o.seed, {**_options_json(o), "folder": folder(name, o)}) for name, o in runs]
 
 
@@ -150,10 +151,12 @@ def merge(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[di
 
 
 def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps: Sequence[str] | None = None,
-              rand_seconds: float | None = None, jobs: int = 1, on_run: Callable[[str], None] | None = None,
-              resume: bool = False) -> str:
-    """The plan through the one suite (``drive/suite.py``; ``jobs`` drives at a time, each in its own process); runs.jsonl
-    grows a row per drive, suite.md / suite.json are rewritten after every drive. Returns the markdown."""
+              rand_seconds: float | None = None, executor: Executor | None = None, on_run: Callable[[str], None] | None = None,
+              resume: bool = False, on_progress: Callable[[int, int], None] | None = None,
+              on_row: Callable[[dict[str, Any]], None] | None = None) -> str:
+    """The plan through the one suite (``drive/suite.py``; ``executor``: e.g. ``cluster.DaskExecutor(jobs=2)``, two
+    drives at a time, each in its own worker process); runs.jsonl grows a row per drive, suite.md / suite.json are
+    rewritten after every drive. Returns the markdown."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     specs = plan(seconds, seeds, maps, rand_seconds, out)
@@ -168,6 +171,8 @@ def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps:
 
     def said(row: dict[str, Any]) -> None:
         finished.append(row)
+        if on_row is not None:
+            on_row(row)
         order = {spec.key: i for i, spec in enumerate(specs)}
         write(sorted(finished, key=lambda r: order.get((r["spec"]["world"], r["spec"]["name"], r["spec"]["controller"],
                                                         r["spec"]["seed"]), 0)))
@@ -175,7 +180,6 @@ def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps:
             on_run(f"{row['run']} {row['controller']}: progress {row['progress_m']:.2f} m, departures {row['departures']}, "
                    f"collisions {row['collisions']}, EMERGENCY {row['emergency_s']:.1f} s")
 
-    result = run_plan(specs, runs_log=out / "runs.jsonl", resume=resume, executor=process_pool(jobs) if jobs > 1 else None,
-                      on_row=said)
+    result = run_plan(specs, runs_log=out / "runs.jsonl", resume=resume, executor=executor, on_row=said, on_progress=on_progress)
     write(result.rows)
     return markdown
