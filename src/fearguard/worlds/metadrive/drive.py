@@ -71,7 +71,7 @@ class DriveOptions:
 
     def scenario(self) -> Scenario:
         """The world this drive opens (the expert skips the camera unless a video is asked for)."""
-        names = {f.name for f in fields(Scenario)} - {"render"}
+        names = {f.name for f in fields(Scenario)} & {f.name for f in fields(self)}
         return Scenario(**{n: getattr(self, n) for n in names}, render=self.controller != "expert" or self.video)
 
 

@@ -14,8 +14,10 @@ environment is created, without editing installed files:
   defaults (1024 m × 22 px/m) that is 2 GB, uploaded for minutes. ``map_region_size = MAP_REGION_M`` (512) and
   ``PIXELS_PER_M`` (11: lines stay ≥ 1 px) give 5632² (127 MB), and the painted region is centred on the map
   (MetaDrive centres it on (0, 0), where the map starts: a long map would lose its markings at the far end);
-- **anisotropic filtering and shadows off** (each about 2× the frame time): ``setAnisotropicDegree`` calls become
-  degree 1, and the PSSM shadow pass is not built (``ENGINE_SETTINGS``: no ``use_pssm``);
+- **anisotropic filtering and shadows off** (each about 2× the frame time here, README; the shadow pass measured
+  1.35 → 1.05 s a step on a loaded machine): ``setAnisotropicDegree`` calls become degree 1, and after the reset the
+  PSSM shadow buffer is switched off and the terrain shader told so (``shadows_off``). Without it the road reads
+  lighter (grey ~145 against ~120 in the road region at noon): MetaDrive's shadow pass darkened the whole road;
 - ``multi_thread_render=False`` (``ENGINE_SETTINGS``); cameras from 160×120 up (a 64×48 camera hung).
 """
 
@@ -62,7 +64,6 @@ def simulator() -> Any:
             import metadrive
             from direct.filter.FilterManager import FilterManager
             from metadrive.engine.core import engine_core, terrain
-            from metadrive.engine.core.terrain import Terrain
             from panda3d.core import Texture, loadPrcFileData
     except ImportError as exc:
         raise SimulatorMissing(
@@ -107,3 +108,11 @@ def simulator() -> Any:
         logging.getLogger(name).setLevel(logging.ERROR)
     _PATCHED = True
     return metadrive
+
+
+def shadows_off(engine: Any) -> None:
+    """Switch off MetaDrive's PSSM shadow pass after a reset (its buffer renders the scene's depth every frame)."""
+    pssm = getattr(engine, "pssm", None)
+    if pssm is not None and getattr(pssm, "buffer", None) is not None:
+        pssm.buffer.set_active(False)
+        engine.render.set_shader_input("use_pssm", False)

@@ -26,12 +26,13 @@ import numpy as np
 from fearguard.camera import CameraModel
 from fearguard.errors import FearguardError
 from fearguard.supervisor import Observation
-from fearguard.worlds.metadrive.headless import ENGINE_SETTINGS, MAP_START, MIN_CAMERA_PX, simulator
+from fearguard.worlds.metadrive.headless import ENGINE_SETTINGS, MAP_START, MIN_CAMERA_PX, shadows_off, simulator
 from fearguard.worlds.metadrive.preset import (
     CAR_LENGTH_M,
     CAR_WIDTH_M,
     DECISION_REPEAT,
     FRAME_RATE_HZ,
+    MAX_STEERING_DEG,
     PHYSICS_STEP_S,
     RADAR_MAX_RANGE_M,
     RADAR_MIN_RANGE_M,
@@ -175,6 +176,8 @@ class MetaDriveWorld:
             raise MapError(f"MetaDrive could not build map {s.map_blocks!r} with {s.lanes} lanes (seed {s.seed}): "
                            f"{type(exc).__name__}: {exc}") from None
         self.ego = self.env.agent
+        if s.render:
+            shadows_off(self.env.engine)
         self._image = _image_of(obs, s)
         self._steps = 0
         self._ended = False
@@ -184,8 +187,8 @@ class MetaDriveWorld:
             self._apply_light(LIGHTS[s.lighting])
         if s.lead is not None:
             self.lead = self._spawn_lead(s.lead, s.lead_ahead_m, s.lead_speed_mps)
-            if s.render:
-                self._image = self._render()
+        if s.render:
+            self._image = self._render()  # the first frame with the light, the shadows off and the lead
         self._expert: Any = None
 
     # -- the World interface -------------------------------------------------------------------------------------
@@ -226,11 +229,13 @@ class MetaDriveWorld:
             self._ended = True
             self._end_info = dict(info)
 
-    def expert_action(self, cruise_mps: float) -> list[float]:
-        """MetaDrive's own IDM policy for the ego (lane keeping, car following, lane changes) at ``cruise_mps``."""
+    def act_expert(self, cruise_mps: float) -> Action:
+        """Drive one step on MetaDrive's own IDM policy (lane keeping, car following, lane changes) at ``cruise_mps``."""
         if self._expert is None:
             self._expert = _idm_policy(self.ego, self.scenario.seed, cruise_mps, lane_change=True)
-        return [float(x) for x in self._expert.act()]
+        steer, throttle = (float(x) for x in self._expert.act())
+        self.step([steer, throttle])
+        return Action(steer, throttle, steer * MAX_STEERING_DEG, cruise_mps)
 
     @property
     def t_s(self) -> float:

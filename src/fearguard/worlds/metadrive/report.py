@@ -1,0 +1,62 @@
+"""What a person reads after a MetaDrive drive: a few lines from its summary, and the suite's table."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+
+def _f(value: Any, fmt: str = ".2f", none: str = "–") -> str:
+    return none if value is None else format(value, fmt)
+
+
+def drive_lines(s: Mapping[str, Any]) -> list[str]:
+    """The summary of one drive as lines of text."""
+    modes = s.get("time_in_mode_s", {})
+    crashes = s.get("crashes_by_kind", {})
+    lines = [
+        f"MetaDrive {s.get('map')} ({s.get('controller')}, seed {s.get('seed')}, {s.get('lighting')}): {s.get('duration_s', 0):.1f} s, "
+        f"progress {s.get('progress_m', 0):.1f} m ({100 * (s.get('route_completion') or 0):.0f} % of the {_f(s.get('route_m'), '.0f')} m "
+        f"route), mean speed {_f(s.get('mean_speed_mps'), '.1f')} m/s" + (f"; ended: {s['end_reason']}" if s.get("end_reason") else ""),
+        f"lane offset RMS {_f(s.get('lane_offset_rms_m'))} m, max {_f(s.get('lane_offset_max_m'))} m, "
+        f"on a solid line {100 * (s.get('solid_line_share') or 0):.0f} % of the time",
+        f"out of road {s.get('out_of_road')}, crashes {s.get('crashes')} (vehicle {crashes.get('vehicle', 0)}, object "
+        f"{crashes.get('object', 0)}, other {crashes.get('other', 0)}); car ahead: min gap {_f(s.get('min_gap_m'), '.1f')} m, "
+        f"min TTC {_f(s.get('min_ttc_s'), '.1f')} s",
+    ]
+    if s.get("guarded"):
+        lines.append("time in mode  " + "  ".join(f"{m} {v:.1f} s" for m, v in modes.items())
+                     + f"; fear mean {_f(s.get('fear_mean'))}, max {_f(s.get('fear_max'))}")
+        lines.append("strategies    " + "  ".join(f"{k} {v:.1f} s" for k, v in s.get("time_in_strategy_s", {}).items()))
+    car = s.get("stopped_car")
+    if car:
+        lines.append(f"stopped car: contact {car['contact']}, stopped behind {car['stopped_behind']} "
+                     f"(gap {_f(car.get('stop_gap_m'), '.1f')} m at {_f(car.get('stop_t_s'), '.1f')} s), passed {car['passed']}, "
+                     f"waited behind {car['waited_behind']}")
+    timing = s.get("timing", {})
+    if timing.get("controller_ms_median") is not None:
+        lines.append(f"cost per step: fearguard {timing['controller_ms_median']:.1f} ms (median; p95 {timing['controller_ms_p95']:.1f}), "
+                     f"simulator {timing['simulator_ms_median']:.0f} ms: "
+                     f"{100 * timing['controller_share_of_simulator_step']:.1f} % of a simulator step")
+    return lines
+
+
+def print_drive(summary: Mapping[str, Any]) -> None:
+    print("\n".join(drive_lines(summary)))
+
+
+SUITE_COLUMNS = ("run", "seed", "controller", "progress m", "% of expert", "route %", "out of road", "crashes", "min gap m",
+                 "min TTC s", "EMERGENCY s", "offset RMS m", "fearguard ms", "simulator ms")
+
+
+def suite_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
+    """The suite's table: one row per drive."""
+    out = ["| " + " | ".join(SUITE_COLUMNS) + " |", "|" + "---|" * len(SUITE_COLUMNS)]
+    for r in rows:
+        cells = [r["run"], str(r["seed"]), r["controller"], _f(r["progress_m"], ".1f"), _f(r.get("progress_vs_expert_pct"), ".0f"),
+                 _f(100 * r["route_completion"] if r.get("route_completion") is not None else None, ".0f"), str(r["out_of_road"]),
+                 str(r["crashes"]), _f(r.get("min_gap_m"), ".1f"), _f(r.get("min_ttc_s"), ".1f"),
+                 _f(r.get("emergency_s"), ".1f") if r["controller"] == "guarded" else "–", _f(r.get("lane_offset_rms_m")),
+                 _f(r.get("controller_ms"), ".1f"), _f(r.get("simulator_ms"), ".0f")]
+        out.append("| " + " | ".join(cells) + " |")
+    return "\n".join(out) + "\n"
