@@ -93,13 +93,13 @@ def test_the_same_seed_gives_the_same_drive() -> None:
 
 
 def test_a_short_guarded_drive_moves_forward_and_writes_its_log(tmp_path: Path) -> None:
-    result = drive(DriveOptions(seed=1, seconds=2.0), tmp_path)
+    result = drive(DriveOptions(seed=1, seconds=1.0), tmp_path)
     s = result.summary
     lines = [json.loads(line) for line in (tmp_path / "log.jsonl").read_text().splitlines()]
-    assert len(lines) == s["steps"] == 20 and not result.interrupted
+    assert len(lines) == s["steps"] == 10 and not result.interrupted
     assert {"lane_confidence", "brightness", "fear", "mode", "strategy", "speed_limit_mps", "steer", "throttle", "lane_offset_m",
             "progress_m", "gap_m"} <= set(lines[0])
-    assert lines[-1]["progress_m"] > lines[0]["progress_m"] and lines[-1]["speed_mps"] > 0.3  # it moves forward
+    assert lines[-1]["progress_m"] > lines[0]["progress_m"] and lines[-1]["speed_mps"] > 0.2  # it moves forward (the speed limit rises at 1.5 m/s²)
     assert s["crashes"] == 0 and s["out_of_road"] == 0 and s["guarded"] and s["lane_offset_max_m"] < 0.5
     assert json.loads((tmp_path / "summary.json").read_text())["controller"] == "guarded"
     assert (tmp_path / "timeline.png").stat().st_size > 0
