@@ -19,17 +19,17 @@ ASSETS="${METADRIVE_ASSETS:-../shared/metadrive/assets}"
 [ -d "$ASSETS" ] || ASSETS=/work/shared/metadrive/assets
 [ -f "$ASSETS/version.txt" ] || { echo "metadrive.sh: MetaDrive's asset tree is missing (looked in ../shared/metadrive/assets and $ASSETS); set METADRIVE_ASSETS" >&2; exit 2; }
 ASSETS="$(cd "$ASSETS" && pwd)"
-APT_PACKAGES="libegl1 libegl-mesa0 libgl1-mesa-dri"
-if ! dpkg -s $APT_PACKAGES >/dev/null 2>&1; then
-  apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $APT_PACKAGES >/dev/null
+missing=""
+for pkg in libegl1 libegl-mesa0 libgl1-mesa-dri; do dpkg -s "$pkg" >/dev/null 2>&1 || missing="$missing $pkg"; done
+if [ -n "$missing" ]; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends $missing >/dev/null
 fi
-[ -x "$VENV/bin/python" ] || python3 -m venv "$VENV"
-PIP=("$VENV/bin/python" -m pip install -q --disable-pip-version-check -c .ci/metadrive-constraints.txt)
-"${PIP[@]}" --upgrade pip
-"${PIP[@]}" metadrive-simulator==0.4.3 "numpy<2" opencv-python \
+test -x "$VENV/bin/python" || python3 -m venv "$VENV"
+pip_install() { "$VENV/bin/python" -m pip install -q --disable-pip-version-check "$@"; }
+pip_install -c .ci/metadrive-constraints.txt --upgrade pip
+pip_install -c .ci/metadrive-constraints.txt metadrive-simulator==0.4.3 "numpy<2" opencv-python \
   scipy "scikit-fuzzy==0.5.0" networkx packaging filterpy matplotlib rich av pytest hypothesis
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps -e .
+pip_install --no-deps -e .
 SITE="$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
 if [ "$(readlink "$SITE/metadrive/assets" 2>/dev/null)" != "$ASSETS" ]; then
   rm -rf "$SITE/metadrive/assets"

@@ -6,7 +6,9 @@ import math
 
 import pytest
 
-from fearguard.worlds.metadrive.metrics import Sample, rising_edges, stopped_car_outcome, summarize_drive
+from fearguard.recorder import Recorder
+from fearguard.supervisor import FearGuard, Observation
+from fearguard.worlds.metadrive.metrics import Sample, rising_edges, stopped_car_outcome, summarize_drive, supervisor_times
 
 DT = 0.1
 
@@ -32,14 +34,23 @@ def test_summary_counts_crashes_by_kind_and_the_smallest_gap() -> None:
     assert s["min_gap_m"] == pytest.approx(3.0) and s["min_ttc_s"] == pytest.approx(0.5)
     assert s["progress_m"] == 10.0 and s["route_completion"] == pytest.approx(0.1)
     assert s["lane_offset_max_m"] == pytest.approx(0.1) and s["lane_offset_rms_m"] == pytest.approx(math.sqrt(0.005))
-    assert not s["guarded"] and s["time_in_mode_s"]["EMERGENCY"] == 0
 
 
-def test_out_of_road_and_modes() -> None:
-    s = summarize_drive(_samples(6, out_of_road=lambda k: k in (2, 3, 5), mode=lambda k: "EMERGENCY" if k >= 3 else "NORMAL",
-                                 strategy="PASS_THROUGH", fear=0.2), DT)
-    assert s["out_of_road"] == 2 and s["guarded"] and s["emergency_entries"] == 1
-    assert s["time_in_mode_s"]["EMERGENCY"] == pytest.approx(0.3) and s["route_completion"] is None
+
+def test_out_of_road_counts_each_departure_once() -> None:
+    s = summarize_drive(_samples(6, out_of_road=lambda k: k in (2, 3, 5)), DT)
+    assert s["out_of_road"] == 2 and s["route_completion"] is None
+
+
+def test_time_in_mode_comes_from_the_recorders_statistics() -> None:
+    recorder = Recorder(None, fps=10.0)
+    guard = FearGuard(lambda frame: 0.0)
+    for k in range(10):  # no frame, no cues: a fault every step, EMERGENCY after the entry frames
+        recorder.frame(k, k * DT, guard.step(Observation(t_s=k * DT, speed_mps=0.0, frame=None)))
+    times = supervisor_times(recorder.stats, 1.0)
+    assert times["guarded"] and sum(times["time_in_mode_s"].values()) == pytest.approx(1.0)
+    assert times["time_in_mode_s"]["EMERGENCY"] > 0 and times["emergency_entries"] == 1
+    assert supervisor_times(Recorder(None, fps=10.0).stats, 1.0) == {"guarded": False, "time_in_mode_s": {}, "emergency_entries": None}
 
 
 def test_stopped_car_waited_behind_or_passed() -> None:

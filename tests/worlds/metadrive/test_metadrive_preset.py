@@ -57,5 +57,5 @@ def test_a_left_bearing_steers_left(bearing: float) -> None:
 def test_speed_controller_brakes_to_stand_and_never_exceeds_full_pedal() -> None:
     assert p.throttle_for(0.0, 5.0) == -1.0 and p.throttle_for(0.2, 0.0) == -1.0  # stand still: full brake
     assert p.throttle_for(10.0, 0.0) == 1.0 and p.throttle_for(10.0, 20.0) == -1.0
-    assert p.throttle_for(10.0, 9.0) == pytest.approx(p.SPEED_GAIN)
+    assert p.throttle_for(10.0, 9.0) == pytest.approx(p.ROLLING_THROTTLE + p.SPEED_GAIN)
     assert p.steering_action(0.0, -3.0, 2.0, 16.0).speed_target_mps == 0.0  # no reverse

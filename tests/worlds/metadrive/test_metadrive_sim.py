@@ -20,9 +20,11 @@ from fearguard.worlds.metadrive.drive import DriveOptions, drive
 from fearguard.worlds.metadrive.world import MetaDriveWorld, Scenario, Truth
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def world() -> MetaDriveWorld:
-    """Seed 1, no traffic, 320×240: the ego on the left lane of a straight first block, the yellow line on its left."""
+    """Seed 1, no traffic, 320×240: the ego on the left lane of a straight first block, the yellow line on its left.
+
+    One per test: MetaDrive allows one engine per process, so a world is closed before the next one opens."""
     w = MetaDriveWorld(Scenario(seed=1, traffic_density=0.0))
     yield w
     w.close()
@@ -30,8 +32,10 @@ def world() -> MetaDriveWorld:
 
 def test_the_frame_is_a_road_whose_yellow_line_lies_where_the_camera_model_puts_it(world: MetaDriveWorld) -> None:
     """The camera model (60° horizontal FOV, 2.095 m up, pitched 0.6° up) projects the lane's left boundary — the
-    yellow centre line, half a lane width left of the ego — onto the yellow paint MetaDrive rendered, row by row."""
+    yellow centre line, half a lane width left of the ego — onto the yellow paint MetaDrive rendered, row by row.
+    The truth at the start is sane too (one world for both: a reset costs 10-25 s)."""
     obs, image, truth = world.sense()
+    _truth_at_the_start_is_sane(world)
     assert image.shape == (240, 320, 3) and image.dtype == np.uint8 and obs.frame is image
     hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)
     sky, road = image[:40].reshape(-1, 3).mean(axis=0), hsv[200:, 100:220].reshape(-1, 3)
@@ -41,7 +45,7 @@ def test_the_frame_is_a_road_whose_yellow_line_lies_where_the_camera_model_puts_
     camera, checked = world.camera, 0
     for distance_m in (6.0, 8.0, 11.0, 15.0):
         u, v, _ = camera.project_ground(np.array([distance_m]), np.array([truth.lane_width_m / 2 - truth.lane_offset_m]))
-        row = int(round(float(v[0])))
+        row = round(float(v[0]))
         found = np.flatnonzero(yellow[row])
         assert found.size, f"no yellow paint on row {row} ({distance_m} m ahead)"
         assert abs(float(np.median(found)) - float(u[0])) < 4.0, (distance_m, row, found, u)
@@ -49,7 +53,7 @@ def test_the_frame_is_a_road_whose_yellow_line_lies_where_the_camera_model_puts_
     assert checked == 4
 
 
-def test_truth_at_the_start_is_sane(world: MetaDriveWorld) -> None:
+def _truth_at_the_start_is_sane(world: MetaDriveWorld) -> None:
     t = world.truth()
     assert isinstance(t, Truth) and t.t_s == 0.0 and t.speed_mps < 0.5
     assert abs(t.lane_offset_m) < 0.05 and abs(t.heading_error_deg) < 1.0 and t.lane_index == 0
@@ -93,13 +97,13 @@ def test_the_same_seed_gives_the_same_drive() -> None:
 
 
 def test_a_short_guarded_drive_moves_forward_and_writes_its_log(tmp_path: Path) -> None:
-    result = drive(DriveOptions(seed=1, seconds=1.0), tmp_path)
+    result = drive(DriveOptions(seed=1, seconds=2.0), tmp_path)
     s = result.summary
     lines = [json.loads(line) for line in (tmp_path / "log.jsonl").read_text().splitlines()]
-    assert len(lines) == s["steps"] == 10 and not result.interrupted
-    assert {"lane_confidence", "brightness", "fear", "mode", "strategy", "speed_limit_mps", "steer", "throttle", "lane_offset_m",
-            "progress_m", "gap_m"} <= set(lines[0])
-    assert lines[-1]["progress_m"] > lines[0]["progress_m"] and lines[-1]["speed_mps"] > 0.2  # it moves forward (the speed limit rises at 1.5 m/s²)
+    assert len(lines) == s["steps"] == 20 and not result.interrupted
+    assert {"lane_confidence", "brightness", "fear", "mode", "strategy", "speed_limit_mps", "steer", "throttle",
+            "lane_offset_m", "progress_m", "gap_m"} <= set(lines[0])
+    assert lines[-1]["progress_m"] > lines[0]["progress_m"] and lines[-1]["speed_mps"] > 0.2  # forward; the limit rises at 1.5 m/s²
     assert s["crashes"] == 0 and s["out_of_road"] == 0 and s["guarded"] and s["lane_offset_max_m"] < 0.5
     assert json.loads((tmp_path / "summary.json").read_text())["controller"] == "guarded"
     assert (tmp_path / "timeline.png").stat().st_size > 0

@@ -30,9 +30,9 @@ from fearguard.report import json_value
 from fearguard.sim.loop import _unsupervised_steering
 from fearguard.supervisor import Command, FearGuard
 from fearguard.vision.lane_steering import HoughLaneSteering
-from fearguard.worlds.metadrive.metrics import Sample, stopped_car_outcome, summarize_drive
+from fearguard.worlds.metadrive.metrics import Sample, stopped_car_outcome, summarize_drive, supervisor_times
 from fearguard.worlds.metadrive.preset import CAR_LENGTH_M, CRUISE_MPS, STEP_S, metadrive_limits
-from fearguard.worlds.metadrive.world import DEFAULT_MAP, MetaDriveWorld, Scenario, Truth
+from fearguard.worlds.metadrive.world import DEFAULT_MAP, MetaDriveWorld, Scenario, Truth, require_positive
 
 CONTROLLERS = ("guarded", "unguarded", "expert")
 RULES_FILE = "road_car.toml"
@@ -63,10 +63,7 @@ class DriveOptions:
     def __post_init__(self) -> None:
         if self.controller not in CONTROLLERS:
             raise ValueError(f"controller {self.controller!r}: choose one of {', '.join(CONTROLLERS)}")
-        for name in ("seconds", "cruise_mps"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        require_positive(self, ("seconds", "cruise_mps"))
         self.scenario()  # the world's own checks (map letters, lighting, lead, lanes, density, camera size)
 
     def scenario(self) -> Scenario:
@@ -125,7 +122,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None, on_step: Cal
                 guard_ms.append(1e3 * (t1 - t0))
             last_steer = steering
             truth = world.truth()
-            samples.append(_sample(truth, cmd))
+            samples.append(_sample(truth))
             analysis = cmd.perceived.analysis if cmd is not None and cmd.perceived is not None else None
             recorder.frame(k, obs.t_s, cmd, image=image if o.controller != "expert" or o.video else None, analysis=analysis,
                            caption=f"v {truth.speed_mps:.1f} m/s", speed_mps=truth.speed_mps,
@@ -142,6 +139,8 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None, on_step: Cal
         end_reason = world.end_reason
         world.close()
     summary = summarize_drive(samples, STEP_S, start.route_m)
+    stats = recorder.stats
+    summary.update(supervisor_times(stats, summary["duration_s"]), fear_mean=stats.fear_mean, fear_max=stats.fear_max)
     if lead_at_m is not None:
         summary["stopped_car"] = stopped_car_outcome(samples, lead_at_m)
     summary.update(
@@ -149,7 +148,6 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None, on_step: Cal
         end_reason=end_reason, aim_distance_m=world.aim_m, open_s=open_s, timing=_timing(guard_ms, sim_ms),
         camera=asdict(world.camera), vehicle=asdict(limits), rules=rules.name,
     )
-    stats = recorder.stats
     summary["supervisor"] = stats.to_json() if stats.supervised_frames else None
     summary = json_value(summary)
     recorder.write_summary(summary)
@@ -159,10 +157,9 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None, on_step: Cal
     return DriveResult(summary, out, interrupted, recorder.video_path)
 
 
-def _sample(truth: Truth, cmd: Command | None) -> Sample:
+def _sample(truth: Truth) -> Sample:
     return Sample(truth.t_s, truth.speed_mps, truth.lane_offset_m, truth.on_solid_line, truth.out_of_road, truth.crashed_vehicle,
-                  truth.crashed_object, truth.crashed_other, truth.progress_m, truth.gap_m, truth.ttc_s,
-                  cmd.mode.name if cmd else None, cmd.strategy.name if cmd else None, cmd.fear if cmd else None)
+                  truth.crashed_object, truth.crashed_other, truth.progress_m, truth.gap_m, truth.ttc_s)
 
 
 def _fields(controller: str, steering: float, speed: float, action: Any, t: Truth) -> dict[str, Any]:
@@ -177,11 +174,11 @@ def _fields(controller: str, steering: float, speed: float, action: Any, t: Trut
 
 
 def _timing(guard_ms: list[float], sim_ms: list[float]) -> dict[str, Any]:
-    """Per-step cost (ms) of the controller and of the simulator step (physics + rendering), and the share."""
-    sim = float(np.median(sim_ms)) if sim_ms else math.nan
-    out: dict[str, Any] = {"simulator_ms_median": sim, "simulator_ms_mean": float(np.mean(sim_ms)) if sim_ms else math.nan}
-    if guard_ms:
-        g = float(np.median(guard_ms))
-        out.update(controller_ms_median=g, controller_ms_mean=float(np.mean(guard_ms)),
-                   controller_ms_p95=float(np.percentile(guard_ms, 95)), controller_share_of_simulator_step=g / sim if sim > 0 else None)
+    """Per-step cost (ms: median, p95) of fearguard (perception + supervisor) and of the simulator step (physics +
+    rendering), and fearguard's share of a simulator step (medians)."""
+    quantiles = {name: np.percentile(values, (50, 95)).tolist() for name, values in (("controller", guard_ms), ("simulator", sim_ms))
+                 if values}
+    out: dict[str, Any] = {f"{name}_ms_{q}": value for name, (m, p) in quantiles.items() for q, value in (("median", m), ("p95", p))}
+    if "controller" in quantiles and "simulator" in quantiles:
+        out["controller_share_of_simulator_step"] = quantiles["controller"][0] / quantiles["simulator"][0]
     return out

@@ -24,6 +24,8 @@ environment is created, without editing installed files:
 from __future__ import annotations
 
 import contextlib
+import importlib
+import importlib.util
 import io
 import logging
 from typing import Any
@@ -59,19 +61,17 @@ _PATCHED = False
 def simulator() -> Any:
     """Import MetaDrive (headless, patched for Mesa) once; a clear error if it is not installed. Returns the module."""
     global _PATCHED
-    try:
-        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):  # pygame's banner
-            import metadrive
-            from direct.filter.FilterManager import FilterManager
-            from metadrive.engine.core import engine_core, terrain
-            from panda3d.core import Texture, loadPrcFileData
-    except ImportError as exc:
-        raise SimulatorMissing(
-            f"MetaDrive is not importable here ({exc}); create its environment with `bash .ci/metadrive.sh` and run "
-            "fearguard from it (.venv-metadrive/bin/fearguard)"
-        ) from None
+    if importlib.util.find_spec("metadrive") is None:
+        raise SimulatorMissing("MetaDrive is not installed in this Python environment; create its environment with "
+                               "`bash .ci/metadrive.sh` and run fearguard from it (.venv-metadrive/bin/fearguard)")
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):  # pygame's banner
+        metadrive = importlib.import_module("metadrive")
     if _PATCHED:
         return metadrive
+    from direct.filter.FilterManager import FilterManager
+    from metadrive.engine.core import engine_core, terrain
+    from panda3d.core import Texture, loadPrcFileData
+
     for line in ("load-display p3headlessgl", "aux-display p3headlessgl", "audio-library-name null", "framebuffer-multisample 0",
                  "multisamples 0", "texture-anisotropic-degree 1", "sync-video 0"):
         loadPrcFileData("fearguard-headless", line)

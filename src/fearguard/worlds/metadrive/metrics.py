@@ -5,8 +5,8 @@
 - out of road (MetaDrive: off every lane of the road, or on the sidewalk: the episode ends) and crashes by kind
   (vehicle, object, other), counted on rising edges;
 - the vehicle or object ahead in the ego's path: smallest bumper-to-bumper gap and smallest time to collision;
-- time per mode and strategy, fear, EMERGENCY entries (the supervisor's, None for the baselines).
-Every step lasts the simulator's step (0.1 s).
+Every step lasts the simulator's step (0.1 s). What the supervisor did (modes, EMERGENCY episodes, fear) comes from
+the run's Recorder (``recorder.CommandStats``), its one owner: ``supervisor_times`` turns its shares into seconds.
 """
 
 from __future__ import annotations
@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from fearguard.supervisor import Mode
+from fearguard.recorder import CommandStats
+from fearguard.worlds.duckietown.metrics import rising_edges
 
-MODES = tuple(m.name for m in Mode)
 STOPPED_SPEED_MPS = 0.3  # [m/s] at or below this the car counts as standing (the road-car rules' standstill_mps)
 PASSED_PROGRESS_M = 5.0  # [m] beyond the stopped car's position along the route: the ego passed it
 
@@ -40,18 +40,6 @@ class Sample:
     progress_m: float
     gap_m: float = math.inf
     ttc_s: float = math.inf
-    mode: str | None = None
-    strategy: str | None = None
-    fear: float | None = None
-
-
-def rising_edges(flags: Sequence[bool]) -> int:
-    """How many times a flag turns on (an event that lasts many steps counts once)."""
-    count, before = 0, False
-    for flag in flags:
-        count += bool(flag and not before)
-        before = bool(flag)
-    return count
 
 
 def _finite_min(values: Sequence[float]) -> float | None:
@@ -60,41 +48,33 @@ def _finite_min(values: Sequence[float]) -> float | None:
 
 
 def summarize_drive(samples: Sequence[Sample], dt_s: float, route_m: float | None = None) -> dict[str, Any]:
-    """JSON-ready numbers of a drive (NaN / inf become None)."""
+    """JSON-ready numbers of a drive from the truth (NaN / inf become None)."""
     if not samples:
         return {"steps": 0, "duration_s": 0.0, "progress_m": 0.0, "route_completion": 0.0, "out_of_road": 0, "crashes": 0}
-    speed = np.array([s.speed_mps for s in samples])
-    offsets = np.array([s.lane_offset_m for s in samples])
-    finite = offsets[np.isfinite(offsets)]
-    modes = [s.mode for s in samples]
-    strategies = [s.strategy for s in samples]
-    fears = [s.fear for s in samples if s.fear is not None]
     progress = float(samples[-1].progress_m)
+    speeds = np.fromiter((s.speed_mps for s in samples), float, len(samples))
+    offset = np.abs(np.fromiter((s.lane_offset_m for s in samples), float, len(samples)))
     crashes = {kind: rising_edges([getattr(s, f"crashed_{kind}") for s in samples]) for kind in ("vehicle", "object", "other")}
+    seen = bool(np.isfinite(offset).any())
     return {
-        "steps": len(samples),
-        "duration_s": len(samples) * dt_s,
-        "progress_m": progress,
-        "route_m": route_m,
+        "steps": len(samples), "duration_s": len(samples) * dt_s, "progress_m": progress, "route_m": route_m,
         "route_completion": min(1.0, max(0.0, progress / route_m)) if route_m else None,
-        "distance_m": float(speed.sum() * dt_s),
-        "mean_speed_mps": float(speed.mean()),
-        "lane_offset_rms_m": float(np.sqrt(np.mean(finite**2))) if finite.size else None,
-        "lane_offset_max_m": float(np.abs(finite).max()) if finite.size else None,
+        "distance_m": float(speeds.sum() * dt_s), "mean_speed_mps": float(speeds.mean()),
+        "lane_offset_rms_m": float(np.sqrt(np.nanmean(offset**2))) if seen else None,
+        "lane_offset_max_m": float(np.nanmax(offset)) if seen else None,
         "solid_line_share": float(np.mean([s.on_solid_line for s in samples])),
-        "out_of_road": rising_edges([s.out_of_road for s in samples]),
-        "crashes": sum(crashes.values()),
-        "crashes_by_kind": crashes,
-        "min_gap_m": _finite_min([s.gap_m for s in samples]),
-        "min_ttc_s": _finite_min([s.ttc_s for s in samples]),
-        "time_stopped_s": float(np.sum(speed <= STOPPED_SPEED_MPS) * dt_s),
-        "guarded": any(m is not None for m in modes),
-        "time_in_mode_s": {m: sum(dt_s for k in modes if k == m) for m in MODES},
-        "time_in_strategy_s": {s: sum(dt_s for k in strategies if k == s) for s in sorted({k for k in strategies if k})},
-        "emergency_entries": rising_edges([m == "EMERGENCY" for m in modes]),
-        "fear_mean": float(np.mean(fears)) if fears else None,
-        "fear_max": float(np.max(fears)) if fears else None,
+        "out_of_road": rising_edges([s.out_of_road for s in samples]), "crashes": sum(crashes.values()), "crashes_by_kind": crashes,
+        "min_gap_m": _finite_min([s.gap_m for s in samples]), "min_ttc_s": _finite_min([s.ttc_s for s in samples]),
+        "time_stopped_s": float(np.count_nonzero(speeds <= STOPPED_SPEED_MPS) * dt_s),
     }
+
+
+def supervisor_times(stats: CommandStats, duration_s: float) -> dict[str, Any]:
+    """Seconds per mode and the EMERGENCY entries from the recorder's statistics (empty without a supervisor)."""
+    if not stats.supervised_frames:
+        return {"guarded": False, "time_in_mode_s": {}, "emergency_entries": None}
+    return {"guarded": True, "time_in_mode_s": {mode: share * duration_s for mode, share in stats.mode_share.items()},
+            "emergency_entries": len(stats.emergency_episodes)}
 
 
 def stopped_car_outcome(samples: Sequence[Sample], car_progress_m: float) -> dict[str, Any]:

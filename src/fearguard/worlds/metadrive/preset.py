@@ -19,8 +19,8 @@ drives the engine (force × throttle, none above 80 km/h), throttle < 0 brakes. 
 not a wheel angle, so it is turned into one by pure pursuit: the aim point lies ``aim_m`` from the camera at bearing
 α, i.e. at (x, y) = (REAR_AXLE_TO_CAMERA_M + aim_m·cos α, aim_m·sin α) from the rear axle; the arc through it has
 κ = 2y / (x² + y²), and a bicycle model needs the wheel angle δ = atan(WHEELBASE_M · κ); steer = δ / 40°.
-Speed: a proportional controller on the speed error, throttle = clip(SPEED_GAIN · (v_target − v), −1, 1), held at
-full brake once the target is (near) zero — MetaDrive's car has no speed input, only forces.
+Speed: a proportional controller on the speed error with a feed-forward, throttle = clip(ROLLING_THROTTLE +
+SPEED_GAIN · (v_target − v), −1, 1), held at full brake once the target is (near) zero — MetaDrive's car has no speed input, only forces.
 """
 
 from __future__ import annotations
@@ -56,6 +56,8 @@ MAX_SPEED_MPS = 80.0 / 3.6  # [m/s] max_speed_km_h: the engine gives no force ab
 
 # -- actuation -----------------------------------------------------------------------------------------------
 SPEED_GAIN = 0.5  # [1/(m/s)] throttle per m/s of speed error: full throttle / brake from 2 m/s off the target
+ROLLING_THROTTLE = 0.2  # [-] added while driving: MetaDrive keeps a brake of 2 on every wheel under throttle (its
+#   _apply_throttle_brake), so a small throttle does not start the car (0.1-0.4 left it standing for 0.7 s)
 HOLD_BELOW_MPS = 0.3  # [m/s] a target at or below this is "stand still": full brake
 AIM_M = 12.0  # [m] from the camera: the distance of the steering's aim point, the ground range of the image lane
 #   model's look-ahead row (vision/steering.py LOOKAHEAD of the road region below the horizon; lane_aim_m() computes it)
@@ -122,7 +124,7 @@ def throttle_for(speed_target_mps: float, speed_mps: float) -> float:
     """The proportional speed controller: full brake when the target is standing still."""
     if speed_target_mps <= HOLD_BELOW_MPS:
         return -1.0
-    return max(-1.0, min(1.0, SPEED_GAIN * (speed_target_mps - speed_mps)))
+    return max(-1.0, min(1.0, ROLLING_THROTTLE + SPEED_GAIN * (speed_target_mps - speed_mps)))
 
 
 def steering_action(steering_deg: float, speed_target_mps: float, speed_mps: float, aim_m: float) -> Action:

@@ -11,34 +11,31 @@ def _f(value: Any, fmt: str = ".2f", none: str = "–") -> str:
 
 
 def drive_lines(s: Mapping[str, Any]) -> list[str]:
-    """The summary of one drive as lines of text."""
-    modes = s.get("time_in_mode_s", {})
+    """The summary of one drive as lines of text, one topic each."""
     crashes = s.get("crashes_by_kind", {})
-    lines = [
-        f"MetaDrive {s.get('map')} ({s.get('controller')}, seed {s.get('seed')}, {s.get('lighting')}): {s.get('duration_s', 0):.1f} s, "
-        f"progress {s.get('progress_m', 0):.1f} m ({100 * (s.get('route_completion') or 0):.0f} % of the {_f(s.get('route_m'), '.0f')} m "
-        f"route), mean speed {_f(s.get('mean_speed_mps'), '.1f')} m/s" + (f"; ended: {s['end_reason']}" if s.get("end_reason") else ""),
-        f"lane offset RMS {_f(s.get('lane_offset_rms_m'))} m, max {_f(s.get('lane_offset_max_m'))} m, "
-        f"on a solid line {100 * (s.get('solid_line_share') or 0):.0f} % of the time",
-        f"out of road {s.get('out_of_road')}, crashes {s.get('crashes')} (vehicle {crashes.get('vehicle', 0)}, object "
-        f"{crashes.get('object', 0)}, other {crashes.get('other', 0)}); car ahead: min gap {_f(s.get('min_gap_m'), '.1f')} m, "
-        f"min TTC {_f(s.get('min_ttc_s'), '.1f')} s",
-    ]
+    route = f"{100 * (s.get('route_completion') or 0):.0f} % of the {_f(s.get('route_m'), '.0f')} m route"
+    topics = {
+        "drive": f"MetaDrive {s.get('map')}, seed {s.get('seed')}, {s.get('lighting')}, {s.get('controller')}: "
+                 f"{s.get('duration_s', 0):.1f} s, {s.get('progress_m', 0):.1f} m ({route}), mean {_f(s.get('mean_speed_mps'), '.1f')} m/s"
+                 + (f"; MetaDrive ended it: {s['end_reason']}" if s.get("end_reason") else ""),
+        "lane": f"offset RMS {_f(s.get('lane_offset_rms_m'))} m, max {_f(s.get('lane_offset_max_m'))} m; "
+                f"on a solid line {100 * (s.get('solid_line_share') or 0):.0f} % of the time; out of road {s.get('out_of_road')}",
+        "crashes": f"{s.get('crashes')} (" + ", ".join(f"{kind} {n}" for kind, n in crashes.items()) + ")",
+        "ahead": f"min gap {_f(s.get('min_gap_m'), '.1f')} m, min TTC {_f(s.get('min_ttc_s'), '.1f')} s",
+    }
     if s.get("guarded"):
-        lines.append("time in mode  " + "  ".join(f"{m} {v:.1f} s" for m, v in modes.items())
-                     + f"; fear mean {_f(s.get('fear_mean'))}, max {_f(s.get('fear_max'))}")
-        lines.append("strategies    " + "  ".join(f"{k} {v:.1f} s" for k, v in s.get("time_in_strategy_s", {}).items()))
+        topics["modes"] = ", ".join(f"{mode} {sec:.1f} s" for mode, sec in s.get("time_in_mode_s", {}).items()) + (
+            f"; {s.get('emergency_entries')} EMERGENCY entries; fear mean {_f(s.get('fear_mean'))}, max {_f(s.get('fear_max'))}")
     car = s.get("stopped_car")
     if car:
-        lines.append(f"stopped car: contact {car['contact']}, stopped behind {car['stopped_behind']} "
-                     f"(gap {_f(car.get('stop_gap_m'), '.1f')} m at {_f(car.get('stop_t_s'), '.1f')} s), passed {car['passed']}, "
-                     f"waited behind {car['waited_behind']}")
+        gap = _f(car.get("stop_gap_m"), ".1f")
+        topics["stopped car"] = (f"contact {car['contact']}, stopped behind {car['stopped_behind']} (gap {gap} m), "
+                                 f"passed {car['passed']}, waited behind {car['waited_behind']}")
     timing = s.get("timing", {})
     if timing.get("controller_ms_median") is not None:
-        lines.append(f"cost per step: fearguard {timing['controller_ms_median']:.1f} ms (median; p95 {timing['controller_ms_p95']:.1f}), "
-                     f"simulator {timing['simulator_ms_median']:.0f} ms: "
-                     f"{100 * timing['controller_share_of_simulator_step']:.1f} % of a simulator step")
-    return lines
+        topics["cost"] = (f"fearguard {timing['controller_ms_median']:.1f} ms a step (p95 {timing['controller_ms_p95']:.1f}), "
+                          f"MetaDrive {timing['simulator_ms_median']:.0f} ms: {100 * timing['controller_share_of_simulator_step']:.1f} %")
+    return [f"{topic}: {text}" for topic, text in topics.items()]
 
 
 def print_drive(summary: Mapping[str, Any]) -> None:

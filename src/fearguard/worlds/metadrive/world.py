@@ -5,7 +5,8 @@ truth)``, ``act(steering_deg, speed_mps)``, ``done``, ``close()``. MetaDrive is 
 applies every setting that makes it render on Mesa), so fearguard's core never needs it.
 
 Ground truth from MetaDrive's own objects: the ego's lane (``vehicle.lane``: lateral offset, + = left of the lane
-centre, and heading error, + = pointing left of the lane, as fearguard's angles), ``on_lane`` and ``crash_sidewalk``
+centre — MetaDrive's ``local_coordinates`` lateral is + to the right, measured by steering left in the simulator — and
+heading error, + = pointing left of the lane, as fearguard's angles), ``on_lane`` and ``crash_sidewalk``
 (out of road), ``crash_vehicle`` / ``crash_object`` / ``crash_building`` / ``crash_human``, the navigation's
 ``travelled_length`` / ``total_length`` (progress and route completion), and the gap to the nearest vehicle or object
 ahead in the ego's path (``path_gap``), with its speed and the time to collision. A drive ends when MetaDrive ends the
@@ -115,10 +116,14 @@ class Scenario:
         if self.width_px < MIN_CAMERA_PX[0] or self.height_px < MIN_CAMERA_PX[1]:
             raise ValueError(f"camera {self.width_px}x{self.height_px}: at least {MIN_CAMERA_PX[0]}x{MIN_CAMERA_PX[1]} "
                              "(smaller cameras hang MetaDrive on Mesa)")
-        for name in ("lane_width_m", "lead_ahead_m", "lead_speed_mps"):
-            value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number, got {value!r}")
+        require_positive(self, ("lane_width_m", "lead_ahead_m", "lead_speed_mps"))
+
+
+def require_positive(values: Any, names: Sequence[str]) -> None:
+    """ValueError naming the first of ``names`` whose value (an attribute of ``values``) is not a finite number > 0."""
+    bad = next((n for n in names if not (math.isfinite(getattr(values, n)) and getattr(values, n) > 0)), None)
+    if bad is not None:
+        raise ValueError(f"{bad} must be a positive number, got {getattr(values, bad)!r}")
 
 
 @dataclass(frozen=True)
@@ -264,7 +269,7 @@ class MetaDriveWorld:
         ttc = gap / closing if math.isfinite(gap) and math.isfinite(closing) and closing > 1e-3 else math.inf
         return Truth(
             t_s=self.t_s, x_m=float(v.position[0]), y_m=float(v.position[1]), heading_rad=float(v.heading_theta),
-            speed_mps=speed, lane_offset_m=float(lat), heading_error_deg=math.degrees(_wrap(float(v.heading_theta) - lane_heading)),
+            speed_mps=speed, lane_offset_m=-float(lat), heading_error_deg=math.degrees(_wrap(float(v.heading_theta) - lane_heading)),
             lane_index=int(v.lane_index[-1]), lane_width_m=float(lane.width), out_of_road=bool((not v.on_lane) or v.crash_sidewalk),
             on_solid_line=bool(v.on_yellow_continuous_line or v.on_white_continuous_line),
             crashed_vehicle=bool(v.crash_vehicle), crashed_object=bool(v.crash_object),
