@@ -15,8 +15,8 @@ environment is created, without editing installed files:
   ``PIXELS_PER_M`` (11: lines stay ≥ 1 px) give 5632² (127 MB), and the painted region is centred on the map
   (MetaDrive centres it on (0, 0), where the map starts: a long map would lose its markings at the far end);
 - **anisotropic filtering and shadows off** (each about 2× the frame time here, README; the shadow pass measured
-  1.35 → 1.05 s a step on a loaded machine): ``setAnisotropicDegree`` calls become degree 1, and after the reset the
-  PSSM shadow buffer is switched off and the terrain shader told so (``shadows_off``). Without it the road reads
+  1.35 → 1.05 s a step on a loaded machine): after the reset every texture's anisotropic degree is set to 1, the
+  PSSM shadow buffer is switched off and the terrain shader told so (``after_reset``). Without it the road reads
   lighter (grey ~145 against ~120 in the road region at noon): MetaDrive's shadow pass darkened the whole road;
 - ``multi_thread_render=False`` (``ENGINE_SETTINGS``); cameras from 160×120 up (a 64×48 camera hung).
 """
@@ -35,7 +35,6 @@ from fearguard.errors import FearguardError
 MAP_REGION_M = 512  # [m] side of the painted terrain region (a power of two, MetaDrive's rule)
 PIXELS_PER_M = 11  # [px/m] of the semantic map that paints road and lines (MetaDrive: 22); lines stay >= 1 px wide
 MIN_CAMERA_PX = (160, 120)  # [px] smaller cameras hung on Mesa
-MAP_START = (-0.5 * MAP_REGION_M + 30.0, 0.0)  # [m] the first block starts 30 m inside the painted square's west edge
 
 # MetaDrive config keys the headless render needs (merged into every world's config)
 ENGINE_SETTINGS: dict[str, Any] = {
@@ -70,7 +69,7 @@ def simulator() -> Any:
         return metadrive
     from direct.filter.FilterManager import FilterManager
     from metadrive.engine.core import engine_core, terrain
-    from panda3d.core import Texture, loadPrcFileData
+    from panda3d.core import loadPrcFileData
 
     for line in ("load-display p3headlessgl", "aux-display p3headlessgl", "audio-library-name null", "framebuffer-multisample 0",
                  "multisamples 0", "texture-anisotropic-degree 1", "sync-video 0"):
@@ -94,15 +93,6 @@ def simulator() -> Any:
 
     FilterManager.createBuffer = buffer_without_msaa
 
-    set_degree = Texture.setAnisotropicDegree
-
-    def no_anisotropy(self: Any, degree: int) -> None:
-        set_degree(self, 1)
-
-    with contextlib.suppress(TypeError, AttributeError):  # a C++ type may refuse new attributes: then the prc line above holds
-        Texture.setAnisotropicDegree = no_anisotropy
-        Texture.set_anisotropic_degree = no_anisotropy
-
     terrain.TerrainProperty.get_semantic_map_pixel_per_meter = classmethod(lambda cls: PIXELS_PER_M)
     for name in ("metadrive", "panda3d"):
         logging.getLogger(name).setLevel(logging.ERROR)
@@ -110,8 +100,20 @@ def simulator() -> Any:
     return metadrive
 
 
-def shadows_off(engine: Any) -> None:
-    """Switch off MetaDrive's PSSM shadow pass after a reset (its buffer renders the scene's depth every frame)."""
+def after_reset(engine: Any) -> None:
+    """What can only be switched off once the scene exists: anisotropic filtering of every texture, and the shadows.
+
+    MetaDrive sets anisotropic degree 16 on the terrain's and the sky's textures, held by its objects and the terrain
+    shader (a C++ method cannot be wrapped), so they are found and set to 1 here; the PSSM shadow buffer renders the
+    scene's depth every frame and is switched off, and the terrain shader told so.
+    """
+    from panda3d.core import Texture
+
+    textures = list(engine.render.findAllTextures())
+    for owner in (getattr(engine, "terrain", None), getattr(engine, "sky_box", None)):
+        textures += [value for value in vars(owner).values() if isinstance(value, Texture)] if owner is not None else []
+    for texture in textures:
+        texture.setAnisotropicDegree(1)
     pssm = getattr(engine, "pssm", None)
     if pssm is not None and getattr(pssm, "buffer", None) is not None:
         pssm.buffer.set_active(False)

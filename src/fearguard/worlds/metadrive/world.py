@@ -27,7 +27,7 @@ import numpy as np
 from fearguard.camera import CameraModel
 from fearguard.errors import FearguardError
 from fearguard.supervisor import Observation
-from fearguard.worlds.metadrive.headless import ENGINE_SETTINGS, MAP_START, MIN_CAMERA_PX, shadows_off, simulator
+from fearguard.worlds.metadrive.headless import ENGINE_SETTINGS, MIN_CAMERA_PX, after_reset, simulator
 from fearguard.worlds.metadrive.preset import (
     CAR_LENGTH_M,
     CAR_WIDTH_M,
@@ -182,7 +182,7 @@ class MetaDriveWorld:
                            f"{type(exc).__name__}: {exc}") from None
         self.ego = self.env.agent
         if s.render:
-            shadows_off(self.env.engine)
+            after_reset(self.env.engine)
         self._image = _image_of(obs, s)
         self._steps = 0
         self._ended = False
@@ -403,7 +403,7 @@ def _config(s: Scenario) -> dict[str, Any]:
     from metadrive.component.map.pg_map import MapGenerateMethod
 
     map_config = {BaseMap.GENERATE_TYPE: MapGenerateMethod.BIG_BLOCK_SEQUENCE, BaseMap.GENERATE_CONFIG: s.map_blocks,
-                  BaseMap.LANE_NUM: s.lanes, BaseMap.LANE_WIDTH: s.lane_width_m, "start_position": list(MAP_START)}
+                  BaseMap.LANE_NUM: s.lanes, BaseMap.LANE_WIDTH: s.lane_width_m}
     config.update(
         map_config=map_config, traffic_density=s.traffic_density,
         start_seed=s.seed, num_scenarios=1, physics_world_step_size=PHYSICS_STEP_S, decision_repeat=DECISION_REPEAT,
