@@ -10,7 +10,13 @@ rm -rf "$env" build/wheel
 python3.11 -m venv "$env"
 "$env/bin/python" -m pip install -q --upgrade pip
 "$env/bin/python" -m pip wheel -q --no-deps . -w build/wheel
-"$env/bin/python" -m pip install -q "donkeycar==5.3.0" "numpy>=1.26,<2" build/wheel/fearguard-*.whl "pytest>=8" "hypothesis>=6.100"
+# docs/donkey.md's install command, exactly as written there, run in the folder holding the wheel with this
+# environment's pip first on PATH (the doc's block follows its "snippet: skip — .ci/donkey.sh runs this block" marker)
+doc_install=$(awk '/snippet: skip — .ci\/donkey.sh runs this block/ {found=1; next} found && /^```bash/ {inside=1; next} inside && /^```/ {exit} inside {print}' docs/donkey.md)
+[ -n "$doc_install" ] || { echo "donkey.sh: no install block in docs/donkey.md"; exit 1; }
+echo "docs/donkey.md: $doc_install"
+(cd build/wheel && PATH="$PWD/../../$env/bin:$PATH" bash -euo pipefail -c "$doc_install")
+"$env/bin/python" -m pip install -q "pytest>=8" "hypothesis>=6.100"
 "$env/bin/python" - <<'PY'
 import sys, numpy, fearguard, donkeycar
 assert sys.version_info[:2] == (3, 11), sys.version

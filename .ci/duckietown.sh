@@ -22,6 +22,6 @@ fi
 PIP=("$VENV/bin/python" -m pip install -q --disable-pip-version-check -c .ci/duckietown-constraints.txt)
 "${PIP[@]}" --upgrade pip
 "${PIP[@]}" duckietown-gym-daffy==6.1.34 duckietown-world-daffy==6.4.3 pyglet==1.5.27 "networkx<3" opencv-python \
-  numpy scipy "scikit-fuzzy==0.5.0" matplotlib filterpy rich packaging pytest hypothesis
+  numpy scipy "scikit-fuzzy==0.5.0" matplotlib filterpy rich packaging pytest hypothesis mcap  # mcap: run.mcap (--mcap)
 "$VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps -e .
 "$VENV/bin/python" -c "from fearguard.worlds.duckietown.world import _simulator; _simulator(); print('duckietown simulator ready')"

@@ -89,3 +89,18 @@ def test_camera_projection_and_its_inverse_agree(tmp_path: Path) -> None:
     path = tmp_path / "camera.toml"
     fg.save_camera(cam, path)
     assert fg.load_camera(path) == cam
+
+
+def test_additions_of_issue_32_are_pinned() -> None:
+    """A caller that holds the estimator's angle passes it; a detector's box has its own field; ``steer`` may be None."""
+    names = [f.name for f in dataclasses.fields(fg.Observation)]
+    assert names[names.index("range_rate_mps") + 1 :] == ["steering_deg", "lead_box"]
+    box = fg.LeadBox(10.0, 20.0, 30.0, 40.0)
+    obs = fg.Observation(t_s=0.0, lead=box)  # the contract's lead= took a box: it keeps working, as lead_box
+    assert obs.lead is None and obs.lead_box == box
+    guard = fg.FearGuard(None)
+    assert guard.step(fg.Observation(t_s=0.0, steering_deg=3.0, cues=fg.Cues(1.0, 130.0, 0.0, float("inf"), 0.0))).steering_deg == 3.0
+    fault = guard.step(fg.Observation(t_s=0.1, cues=fg.Cues(1.0, 130.0, 0.0, float("inf"), 0.0)))
+    assert fault.reasons[0] == "fault: no steering: give Observation.steering_deg or a steering function"
+    bad = fg.FearGuard(None).step(fg.Observation(t_s=0.0, steering_deg=float("nan")))
+    assert bad.reasons[0] == "fault: the given steering_deg is nan, not a finite number"

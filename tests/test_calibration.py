@@ -11,7 +11,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fearguard.calibration import (
+from fearguard.camera import load_camera
+from fearguard.cli import main
+from fearguard.errors import FearguardError
+from fearguard.vision.calibration import (
     GRID_BEND_MAX,
     CalibrationError,
     CalibrationResult,
@@ -22,9 +25,6 @@ from fearguard.calibration import (
     grid_bend,
     parse_pattern,
 )
-from fearguard.camera import load_camera
-from fearguard.cli import main
-from fearguard.errors import FearguardError
 
 PATTERN = (9, 6)
 SUBSET = ("calibration2.jpg", "calibration3.jpg", "calibration6.jpg", "calibration8.jpg", "calibration12.jpg")  # quick, all found

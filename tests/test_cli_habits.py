@@ -95,7 +95,7 @@ def test_replay_counts_the_frames_its_range_selects_not_the_whole_recording(shar
 
 @pytest.mark.parametrize(("args", "says"), [
     (["--steer", "no_such_module_xyz:steer"], "SteerImportError: --steer no_such_module_xyz:steer: cannot import"),
-    (["--vehicle", "no_such_car"], "VehicleFileError: no_such_car: --vehicle: neither a preset"),
+    (["--vehicle", "no_such_car"], "VehicleFileError: no_such_car, --vehicle: neither a preset"),
 ])
 def test_replay_rejects_a_bad_steer_or_vehicle_with_exit_2(tmp_path: Path, capsys, args: list[str], says: str) -> None:
     assert main(["replay", str(tmp_path / "none.mp4"), "--out", str(tmp_path / "o"), *args]) == 2
@@ -109,7 +109,8 @@ def test_a_warning_is_one_line_without_python_source(shared_data: Path, tmp_path
     assert main(argv) == 0
     err = capsys.readouterr().err
     assert f"warning: {log}: unknown columns ignored: wheel_temp" in err
-    assert "SensorLogWarning" not in err and "warnings.warn" not in err and len(err.strip().splitlines()) == 1
+    other = [line for line in err.strip().splitlines() if not line.startswith("replay: ")]  # progress lines without a terminal
+    assert "SensorLogWarning" not in err and "warnings.warn" not in err and len(other) == 1
 
 
 def test_suite_prints_totals_and_keeps_supervisor_checks_apart(tmp_path: Path, capsys) -> None:
@@ -131,7 +132,7 @@ def _readme_commands() -> list[str]:
     text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
     blocks = re.findall(r"```bash\n(.*?)```", text, flags=re.S)
     joined = "\n".join(blocks).replace("\\\n", " ")
-    return [line.split("  #")[0].strip() for line in joined.splitlines() if line.startswith(".venv/bin/fearguard ")]
+    return [line.split("  #")[0].split(" || ")[0].strip() for line in joined.splitlines() if line.startswith(".venv/bin/fearguard ")]
 
 
 def test_every_readme_command_is_one_the_parser_accepts() -> None:
@@ -159,3 +160,30 @@ def test_the_progress_line_without_rich_is_one_line_redrawn_on_stderr(monkeypatc
         bar.update(4, 4)
     err = capsys.readouterr().err
     assert err.startswith("\rsuite: 0/4 runs") and "\rsuite: 4/4 runs" in err and err.endswith("\n") and err.count("\n") == 1
+
+
+def test_without_a_terminal_a_long_job_prints_a_line_per_step_or_per_5_percent(monkeypatch, capsys) -> None:
+    """Issue 37: a CI log or a pipe sees progress too: a line per run / image / invariant, every 5 % of a long replay."""
+    import fearguard.cli as cli
+
+    assert [n for n in range(1, 8) if cli.plain_line_due(n, 7)] == list(range(1, 8))  # short: every step
+    assert [n for n in range(1, 401) if cli.plain_line_due(n, 400)] == list(range(20, 401, 20))  # long: every 5 %, the end
+    assert [n for n in range(1, 1001) if cli.plain_line_due(n, None)] == [500, 1000]  # unknown length
+    assert not cli.plain_line_due(0, 10)
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: False)
+    with cli._Progress("suite", unit="runs") as bar:
+        for done in range(4):
+            bar.update(done, 3)
+    lines = capsys.readouterr().err.splitlines()
+    assert [line.split(" runs")[0] for line in lines] == ["suite: 1/3", "suite: 2/3", "suite: 3/3"]
+    assert lines[-1].startswith("suite: 3/3 runs (100 %)")
+
+
+def test_verify_says_how_many_examples_of_each_invariant_are_done(tmp_path: Path) -> None:
+    from fearguard.testing.verify import verify_command
+
+    rows: list[str] = []
+    progress: list[str] = []
+    assert verify_command(None, None, None, 8, 0, tmp_path, ("1",), echo=rows.append, progress=progress.append) == 0
+    assert progress == [f"verify: invariant 1 (limits in range): {n}/8 examples" for n in (2, 4, 6)]
+    assert any(row.lstrip().startswith("1  limits in range") for row in rows)

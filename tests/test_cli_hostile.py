@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from fearguard.cli import main
-from fearguard.report import read_jsonl
-from fearguard.video import count_frames
+from fearguard.outputs.report import read_jsonl
+from fearguard.outputs.video import count_frames
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 SCENARIOS = SRC / "fearguard" / "scenarios"
@@ -152,7 +152,7 @@ def test_a_signal_while_plotting_marks_the_run_interrupted(tmp_path: Path, monke
 
 
 def test_a_signal_while_the_replay_plots_marks_the_replay_interrupted(images: Path, tmp_path: Path, monkeypatch, capsys) -> None:
-    import fearguard.recorder as recorder
+    import fearguard.outputs.recorder as recorder
 
     def plot(*args, **kwargs):
         os.kill(os.getpid(), signal.SIGINT)

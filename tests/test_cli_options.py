@@ -49,7 +49,10 @@ PARSE_TIME = [  # argparse rejects these: usage error, exit 2, "argument --NAME:
 ]
 
 
-@pytest.mark.parametrize(("argv", "option", "says"), PARSE_TIME, ids=[" ".join(a[:1] + a[2:] if a[0] == "replay" else a) for a, _, _ in PARSE_TIME])
+IDS = [" ".join(a[:1] + a[2:] if a[0] == "replay" else a) for a, _, _ in PARSE_TIME]
+
+
+@pytest.mark.parametrize(("argv", "option", "says"), PARSE_TIME, ids=IDS)
 def test_a_bad_option_value_is_a_usage_error_naming_the_option(capsys, monkeypatch, argv, option, says) -> None:
     monkeypatch.chdir(Path(__file__).resolve().parents[1])
     with pytest.raises(SystemExit) as exc:

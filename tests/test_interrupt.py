@@ -9,7 +9,7 @@ import threading
 
 import pytest
 
-from fearguard.interrupt import StopSignal, stop_on_signals
+from fearguard.drive.interrupt import StopSignal, stop_on_signals
 
 
 def test_a_signal_sets_the_flag_and_the_exit_code() -> None:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from fearguard.video import count_frames
+from fearguard.outputs.video import count_frames
 
 SRC = Path(__file__).resolve().parents[1] / "src"
 LONG = "name = 'long'\nduration_s = 30.0\n[[road.segments]]\nkind = 'straight'\nlength_m = 80.0\n[expect]\nno_collision = true\n"

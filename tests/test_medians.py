@@ -1,4 +1,4 @@
-"""fearguard.medians.median is np.median: the same number for every dtype a frame's arrays have, NaN included."""
+"""fearguard.vision.medians.median is np.median: the same number for every dtype a frame's arrays have, NaN included."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from fearguard.medians import median
+from fearguard.vision.medians import median
 
 DTYPES = st.sampled_from([np.uint8, np.int64, np.float32, np.float64])
 

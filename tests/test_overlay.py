@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import fearguard as fg
-from fearguard import text_layout
-from fearguard.overlay import annotate, overlay_boxes
-from fearguard.text_layout import TextStyle
+from fearguard.outputs import text_layout
+from fearguard.outputs.overlay import annotate, overlay_boxes
+from fearguard.outputs.text_layout import TextStyle
 
 SIZES = [(160, 120), (320, 240), (640, 480), (1280, 720)]
 

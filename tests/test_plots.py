@@ -14,12 +14,12 @@ from matplotlib.figure import Figure
 from fearguard.cues import Cues
 from fearguard.fear import FearLevel
 from fearguard.fuzzy.loader import bundled_rules_path, load_rules
+from fearguard.outputs.timeline import Trace, timeline_figure
 from fearguard.policy import Mode, Strategy
 from fearguard.sim.loop import run_scenario
 from fearguard.sim.scenario import load_scenario
 from fearguard.sim.suite import trajectory_figure
 from fearguard.supervisor import Command
-from fearguard.timeline import Trace, timeline_figure
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 

@@ -11,11 +11,11 @@ import pytest
 
 from fearguard.cues import Cues
 from fearguard.fear import Cause, FearLevel
+from fearguard.outputs.recorder import CommandStats, Elevated, Episode, Recorder, write_json
+from fearguard.outputs.report import read_jsonl
+from fearguard.outputs.video import count_frames
 from fearguard.policy import Mode, Strategy
-from fearguard.recorder import CommandStats, Elevated, Episode, Recorder, write_json
-from fearguard.report import read_jsonl
 from fearguard.supervisor import Command, FearGuard, Observation
-from fearguard.video import count_frames
 
 CALM = Cues(0.9, 120.0, 0.0, math.inf, 0.5)
 

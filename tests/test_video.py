@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fearguard.video import H264Writer, MjpgWriter, count_frames, h264_available, open_video
+from fearguard.outputs.video import H264Writer, MjpgWriter, count_frames, h264_available, open_video
 
 
 def frames(n: int, w: int = 64, h: int = 48) -> list[np.ndarray]:

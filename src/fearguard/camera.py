@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 from fearguard.errors import CameraError
-from fearguard.reader import Table, number_list, read_toml
+from fearguard.files.reader import Table, number_list, read_toml
 
 DEFAULT_HFOV_DEG = 60.0  # [deg] horizontal field of view assumed when no calibration is given
 

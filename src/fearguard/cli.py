@@ -22,8 +22,8 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from fearguard.drive.interrupt import StopSignal, stop_on_signals
 from fearguard.errors import FearguardError
-from fearguard.interrupt import StopSignal, stop_on_signals
 from fearguard.vehicle import PRESETS
 
 if TYPE_CHECKING:
@@ -31,20 +31,21 @@ if TYPE_CHECKING:
     from fearguard.observation import Lead
     from fearguard.supervisor import FearGuard
 
-FRAME_LOOPS = ("replay", "run", "suite", "metadrive")  # commands that finish the current frame on a signal
+FRAME_LOOPS = ("replay", "run", "suite", "metadrive", "metadrive-suite")  # commands that finish the current frame on a signal
+MCAP_HELP = "also write run.mcap for Foxglove: the annotated image, the command, the cues and the reasons (the ros extra)"
 VIDEO_HELP = "also write the annotated video (annotated.mp4, H.264; annotated.avi, MJPG, without the video extra)"
 OUT_ROOT = Path("fearguard-out")  # where a command writes when --out is not given: OUT_ROOT/COMMAND-LABEL-YYYYmmdd-HHMMSS
 OUT_HELP = "(default: a new folder fearguard-out/%s-...-TIMESTAMP)"
 
 EXPLAIN_SETTLE_S = 10.0  # [s] explain shows the command after this long with the same cues
 EXPLAIN_RATE_HZ = 10.0  # [Hz] frame rate of that settling run
-CALM = {"lane_confidence": 0.9, "brightness": 120.0, "occlusion": 0.0, "obstacle_range_m": math.inf, "qr_staleness_s": 0.5}
 
 
-def _parse_cues(text: str) -> Cues:
-    from fearguard.cues import CUE_NAMES, Cues
+def _parse_cues(text: str, brightness_band: tuple[float, float]) -> Cues:
+    """NAME=VALUE,... over the calm picture (``cues.calm_values``: brightness in the middle of the rules' band)."""
+    from fearguard.cues import CUE_NAMES, Cues, calm_values
 
-    values = dict(CALM)
+    values = dict(zip(CUE_NAMES, calm_values(brightness_band), strict=True))
     for item in filter(None, (p.strip() for p in text.split(","))):
         name, sep, raw = item.partition("=")
         if not sep or name.strip() not in CUE_NAMES:
@@ -79,7 +80,7 @@ def cmd_check(args: argparse.Namespace) -> int:
 def cmd_plot(args: argparse.Namespace) -> int:
     from fearguard.fuzzy.loader import load_rules
 
-    plot_rules = _desktop("fearguard.plot", "plots").plot_rules
+    plot_rules = _desktop("fearguard.outputs.plot", "plots").plot_rules
 
     for path in plot_rules(load_rules(args.file), args.out or _new_out("rules-plot", Path(args.file or "default").stem)):
         print(path)
@@ -93,7 +94,7 @@ def cmd_explain(args: argparse.Namespace) -> int:
     from fearguard.supervisor import FearGuard
 
     rules = load_rules(args.rules)
-    cues = _parse_cues(args.cues)
+    cues = _parse_cues(args.cues, rules.brightness_band)
     result = rules.evaluate(cues)
     print("cues:  " + ", ".join(f"{n}={getattr(cues, n):g}" for n in CUE_NAMES))
     print(f"fear:  {result.fear:.3f}  level {result.level.name}  dominant cause {result.dominant_cause.value}")
@@ -123,8 +124,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """Chessboard photos → camera.toml: found/missed per image, the RMS reprojection error, the intrinsics."""
-    from fearguard.calibration import CalibrationError, calibrate_chessboard, expand_image_paths, parse_pattern
     from fearguard.camera import save_camera
+    from fearguard.vision.calibration import CalibrationError, calibrate_chessboard, expand_image_paths, parse_pattern
 
     pattern = parse_pattern(args.pattern)
     paths = expand_image_paths(args.images)
@@ -170,8 +171,24 @@ def _new_out(command: str, label: str) -> Path:
     return path
 
 
+PLAIN_STEPS_MAX = 100  # [steps] without a terminal, a line per step up to this many steps (runs, images, invariants) ...
+PLAIN_LINES = 20  # [lines] ... and for longer jobs (frames) a line every 1/20 of the job (5 %), or per PLAIN_UNKNOWN_EVERY
+PLAIN_UNKNOWN_EVERY = 500  # [steps] a line every this many steps when the total is unknown
+
+
+def plain_line_due(done: int, total: int | None) -> bool:
+    """Whether a job's progress earns a line of its own in a log (stderr no terminal): a line per step for short jobs, every
+    5 % for long ones, the last step always; step counts, not the clock, so a log reads the same on any machine."""
+    if total is None or total <= 0:
+        return done > 0 and done % PLAIN_UNKNOWN_EVERY == 0
+    if total <= PLAIN_STEPS_MAX or done >= total:
+        return done > 0
+    return done * PLAIN_LINES // total != (done - 1) * PLAIN_LINES // total
+
+
 class _Progress:
-    """A progress bar on stderr (rich's; without rich a plain line redrawn in place); quiet when stderr is no terminal."""
+    """A progress bar on stderr (rich's; without rich a plain line redrawn in place); without a terminal (a CI log, a pipe,
+    nohup) one line per step for short jobs and every 5 % for long ones (``plain_line_due``)."""
 
     def __init__(self, label: str, unit: str = "frames") -> None:
         self._label, self._unit, self._start = label, unit, time.perf_counter()
@@ -202,7 +219,12 @@ class _Progress:
     def update(self, done: int, total: int | None) -> None:
         elapsed = time.perf_counter() - self._start
         rate = f"{done / elapsed:.{0 if self._unit == 'frames' else 2}f} {self._unit}/s" if elapsed > 0 and done else ""
-        if self._bar is not None:
+        if not self._live:
+            if plain_line_due(done, total):
+                share = f" ({100 * done / total:.0f} %)" if total else ""
+                print(f"{self._label}: {done}{f'/{total}' if total else ''} {self._unit}{share} {rate}".rstrip(), file=sys.stderr,
+                      flush=True)
+        elif self._bar is not None:
             self._bar.update(self._task, completed=done, total=total, rate=rate)
         elif self._live and (self._drawn is None or elapsed - self._drawn >= 0.5 or done == total):
             self._drawn = elapsed
@@ -211,8 +233,9 @@ class _Progress:
 
 def cmd_replay(args: argparse.Namespace) -> int:
     """A recorded drive → log.jsonl, summary.json, timeline.png (and annotated.mp4): where and why fear rose."""
+    from fearguard.files.steer_import import resolve_steer
+    from fearguard.replay.bags import BagTopics
     from fearguard.replay.run import ReplayOptions, replay
-    from fearguard.steer_import import resolve_steer
     from fearguard.vehicle import resolve_vehicle
 
     steer, _ = resolve_steer(args.steer)
@@ -220,6 +243,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
         rules=args.rules, camera=args.camera, sensor_log=args.sensor_log, strict=args.strict, no_ultrasonic=args.no_ultrasonic,
         qr_localisation=args.qr_localisation, speed_mps=args.speed_mps, fps=args.fps, start=args.from_, stop=args.to,
         every=args.every, video=args.video, plots=not args.no_plots, vehicle=resolve_vehicle(args.vehicle), steer=steer,
+        mcap=args.mcap, topics=BagTopics(args.image_topic, args.range_topic, args.speed_topic, args.qr_topic),
     )
     out = args.out or _new_out("replay", args.recording.rstrip("/\\"))
     with _Progress("replay") as progress:
@@ -265,6 +289,10 @@ def _print_replay_summary(summary: dict, out_dir: object) -> None:
     if video:
         rescaled = f", {video['rescaled_frames']} frame(s) of another size scaled to the first" if video["rescaled_frames"] else ""
         print(f"video {video['path']} ({video['frames']} frames{rescaled})")
+    if summary.get("mcap"):
+        print(f"foxglove {summary['mcap']['path']} ({summary['mcap']['frames']} frames)")
+    if summary.get("bag_topics"):
+        print("bag topics: " + ", ".join(f"{role} {topic}" for role, topic in summary["bag_topics"].items()))
 
 
 def _by(summary: dict) -> str:
@@ -280,7 +308,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     controller = "unguarded" if args.unguarded else (args.baseline or "guarded")
     out = Path(args.out) if args.out else _new_out("run", f"{scenario.name}-{controller}")
     with _Progress(scenario.name) as progress:
-        result = run_to_folder(scenario, out, args.seed, controller, args.video, progress.update, stop=args.stop)
+        result = run_to_folder(scenario, out, args.seed, controller, args.video, progress.update, stop=args.stop, mcap=args.mcap)
     m = result.metrics
     print(f"{scenario.name} ({controller}, seed {result.seed}): {result.frames} frames, {m.distance_m:.1f} m, "
           f"mean speed {m.mean_speed_mps or 0.0:.2f} m/s, collisions {m.collisions}, lane departures {m.lane_departures}, "
@@ -296,6 +324,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     print(f"wrote {out}/log.jsonl, summary.json{plots}")
     if result.video_path is not None:
         print(f"video {result.video_path}")
+    if args.mcap:
+        print(f"foxglove {out}/run.mcap")
     if result.interrupted:
         return _interrupted_exit(args.stop)
     return 0 if result.passed else 1
@@ -306,7 +336,7 @@ def cmd_suite(args: argparse.Namespace) -> int:
 
     Each finished run is appended to runs.jsonl at once; ``--resume`` skips the runs already there.
     """
-    from fearguard.recorder import write_json
+    from fearguard.outputs.recorder import write_json
     from fearguard.sim.loop import CONTROLLERS
     from fearguard.sim.suite import run_suite, scenario_files, suite_markdown, suite_table, suite_totals
 
@@ -386,7 +416,7 @@ def cmd_duckietown(args: argparse.Namespace) -> int:
             map_name=args.map, seconds=args.seconds, controller=args.baseline or "guarded", cruise_mps=args.cruise_mps,
             obstacle=args.obstacle, ahead_m=args.ahead, remove_after_s=args.remove_after, range_sensor=args.range,
             domain_rand=args.domain_rand, seed=args.seed, width_px=args.width, height_px=args.width * 3 // 4, rules=args.rules,
-            video=args.video, plots=not args.no_plots,
+            video=args.video, plots=not args.no_plots, mcap=args.mcap,
         )
     except ValueError as exc:
         raise FearguardError(f"duckietown: {exc}") from None
@@ -397,6 +427,8 @@ def cmd_duckietown(args: argparse.Namespace) -> int:
     print(f"wrote {out}/log.jsonl, summary.json{plots}")
     if result.video_path is not None:
         print(f"video {result.video_path}")
+    if args.mcap:
+        print(f"foxglove {out}/run.mcap")
     if result.interrupted:
         print("interrupted: the log holds every step driven so far")
         return 130
@@ -409,9 +441,9 @@ def cmd_duckietown_suite(args: argparse.Namespace) -> int:
 
     out = args.out or _new_out("duckietown-suite", f"{args.seeds}seeds")
     table = run_suite(out, seconds=args.seconds, seeds=args.seeds, maps=args.maps, rand_seconds=args.rand_seconds, jobs=args.jobs,
-                      on_run=print)
+                      on_run=lambda line: print(line, flush=True), resume=args.resume)
     print(table)
-    print(f"wrote {out}/suite.md, suite.json")
+    print(f"wrote {out}/runs.jsonl, suite.md, suite.json")
     return 0
 
 
@@ -426,7 +458,7 @@ def cmd_metadrive(args: argparse.Namespace) -> int:
             map_blocks=args.map, lanes=args.lanes, traffic_density=args.traffic, lighting=args.lighting, seed=args.seed,
             seconds=args.seconds, controller=args.baseline or "guarded", cruise_mps=args.cruise_mps, range_sensor=args.range,
             lead=args.lead, lead_ahead_m=args.lead_ahead, lead_speed_mps=args.lead_speed, width_px=args.width,
-            height_px=args.width * 3 // 4, rules=args.rules, video=args.video, plots=not args.no_plots,
+            height_px=args.width * 3 // 4, rules=args.rules, video=args.video, plots=not args.no_plots, mcap=args.mcap,
         )
     except ValueError as exc:
         raise FearguardError(f"metadrive: {exc}") from None
@@ -438,6 +470,28 @@ def cmd_metadrive(args: argparse.Namespace) -> int:
         print(f"video {result.video_path}")
     if result.interrupted:
         print("interrupted: the log holds every step driven so far")
+        return _interrupted_exit(args.stop)
+    return 0
+
+
+def cmd_metadrive_suite(args: argparse.Namespace) -> int:
+    """Development seeds guarded / unguarded / expert, a stopped car, night → runs.jsonl, suite.md, suite.json."""
+    from fearguard.worlds.metadrive.drive import DriveOptions
+    from fearguard.worlds.metadrive.suite import plan, run_suite
+
+    out = Path(args.out) if args.out else _new_out("metadrive-suite", f"{len(args.seeds)}seeds")
+    try:
+        base = DriveOptions(map_blocks=args.map, lanes=args.lanes, traffic_density=args.traffic, cruise_mps=args.cruise_mps)
+        specs = plan(args.seeds, args.seconds, args.stopped_seeds, args.night_seeds, out, base)
+    except ValueError as exc:
+        raise FearguardError(f"metadrive-suite: {exc}") from None
+    print(f"metadrive-suite: {len(specs)} drives → {out}", file=sys.stderr)
+    table, interrupted = run_suite(out, specs, jobs=args.jobs, on_run=lambda line: print(line, flush=True), resume=args.resume,
+                                   stop=args.stop)
+    print(table)
+    print(f"wrote {out}/runs.jsonl, suite.md, suite.json")
+    if interrupted:
+        print("interrupted: the table holds the finished drives; run the same command with --resume to go on")
         return _interrupted_exit(args.stop)
     return 0
 
@@ -613,6 +667,12 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--every", type=_count(1), default=1, help="process every N-th frame (N >= 1)")
     rp.add_argument("--video", action="store_true", help=VIDEO_HELP)
     rp.add_argument("--no-plots", action="store_true", help="skip timeline.png")
+    rp.add_argument("--mcap", action="store_true", help=MCAP_HELP)
+    for role, what in (("image", "the camera (sensor_msgs/Image or CompressedImage)"), ("range", "the range sensor (sensor_msgs/Range)"),
+                       ("speed", "the speed (nav_msgs/Odometry, geometry_msgs/TwistStamped or Twist)"),
+                       ("qr", "QR payloads (std_msgs/String)")):
+        rp.add_argument(f"--{role}-topic", default=None, help=f"a ROS bag's topic for {what} (default: the only one there is"
+                        + ("" if role == "image" else "; none: ignore it") + ")")
     rp.set_defaults(func=cmd_replay)
     run = sub.add_parser("run", help="one scenario closed loop: rendered frames → perception → supervisor → car")
     run.add_argument("scenario", help="a bundled scenario's name (e.g. night; `fearguard scenarios` lists them) or a scenario file")
@@ -622,6 +682,7 @@ def build_parser() -> argparse.ArgumentParser:
     who.add_argument("--baseline", choices=("unguarded", "crisp", "aeb"), default=None, help="a baseline speed rule instead of fearguard")
     run.add_argument("--out", type=_out_folder, default=None, help="output folder " + OUT_HELP % "run")
     run.add_argument("--video", action="store_true", help=VIDEO_HELP)
+    run.add_argument("--mcap", action="store_true", help=MCAP_HELP)
     run.set_defaults(func=cmd_run)
     suite = sub.add_parser("suite", help="every scenario guarded and with the baselines: a comparison table")
     suite.add_argument("folder", nargs="?", type=_folder, default=None, help="folder of scenario files (default: the bundled library)")
@@ -664,6 +725,7 @@ def build_parser() -> argparse.ArgumentParser:
     dt.add_argument("--width", type=_count(40), default=320, help="camera width in pixels, 4:3 (default 320; 160 is faster)")
     dt.add_argument("--rules", default=None, help="rule file (default: the bundled rules/duckiebot.toml)")
     dt.add_argument("--video", action="store_true", help=VIDEO_HELP)
+    dt.add_argument("--mcap", action="store_true", help=MCAP_HELP)
     dt.add_argument("--no-plots", action="store_true", help="skip drive.png and timeline.png")
     dt.add_argument("--list-maps", action="store_true", help="print the maps the simulator ships and exit")
     dt.set_defaults(func=cmd_duckietown)
@@ -674,6 +736,7 @@ def build_parser() -> argparse.ArgumentParser:
     dts.add_argument("--seeds", type=_count(0), default=10, help="domain-randomised seeds (default 10)")
     dts.add_argument("--maps", nargs="*", default=None, help="lane maps (default: loop_empty small_loop zigzag_dists straight_road)")
     dts.add_argument("--rand-seconds", type=_number(above=0.0), default=None, help="duration of each randomised drive (default: --seconds)")
+    dts.add_argument("--resume", action="store_true", help="skip the drives already in OUT/runs.jsonl (after an interruption)")
     dts.add_argument("--jobs", type=_count(1), default=1, help="drives at a time, each in its own process (default 1)")
     dts.set_defaults(func=cmd_duckietown_suite)
     md = sub.add_parser("metadrive", help="drive MetaDrive's road car from its camera (needs `bash .ci/metadrive.sh`)")
@@ -698,7 +761,22 @@ def build_parser() -> argparse.ArgumentParser:
                     + OUT_HELP % "metadrive")
     md.add_argument("--video", action="store_true", help=VIDEO_HELP)
     md.add_argument("--no-plots", action="store_true", help="skip timeline.png")
+    md.add_argument("--mcap", action="store_true", help=MCAP_HELP)
     md.set_defaults(func=cmd_metadrive)
+    mds = sub.add_parser("metadrive-suite", help="MetaDrive: development seeds guarded and with both baselines, a stopped car, night")
+    mds.add_argument("--out", default=None, help="output folder (runs.jsonl, suite.md, suite.json, a folder per drive) "
+                     + OUT_HELP % "metadrive-suite")
+    mds.add_argument("--seeds", type=_count(0), nargs="+", default=[0, 1, 2], help="day seeds (default 0 1 2)")
+    mds.add_argument("--stopped-seeds", type=_count(0), nargs="*", default=[0], help="seeds with a stopped car in the lane (default 0)")
+    mds.add_argument("--night-seeds", type=_count(0), nargs="*", default=[0], help="seeds driven at night (default 0)")
+    mds.add_argument("--seconds", type=_number(above=0.0), default=30.0, help="duration of each drive (default 30)")
+    mds.add_argument("--map", type=_blocks, default="SCSC", help="MetaDrive block string (default SCSC)")
+    mds.add_argument("--lanes", type=_bounded_count(1, 6), default=3, help="lanes per direction (default 3)")
+    mds.add_argument("--traffic", type=_number(0.0, below=1.000001), default=0.05, help="traffic density 0..1 (default 0.05)")
+    mds.add_argument("--cruise-mps", type=_number(above=0.0, below=22.3), default=10.0, help="cruise speed (default 10 m/s)")
+    mds.add_argument("--resume", action="store_true", help="skip the drives already in OUT/runs.jsonl (after an interruption)")
+    mds.add_argument("--jobs", type=_count(1), default=1, help="drives at a time, each in its own process (default 1)")
+    mds.set_defaults(func=cmd_metadrive_suite)
     return parser
 
 

@@ -35,22 +35,32 @@ class Worsens(Enum):
 
 @dataclass(frozen=True)
 class CueSpec:
-    """Physical range and direction of one cue; ``worst`` is None when it depends on the band."""
+    """Every fact about one cue, in one place: everything else (checks, samplers, plots, calm pictures) derives from it.
+
+    ``worst`` and ``calm`` are None for brightness: they depend on the rule file's normal band (its two ends are both
+    worst; its middle is calm). ``span``: how far an open-ended cue is worth sampling when a rule file has no variable
+    for it. ``panel``: the timeline panel it is drawn on.
+    """
 
     name: str
     low: float
     high: float
     worsens: Worsens
     worst: float | None
+    unit: str = ""
+    calm: float | None = None
+    span: float = 1.0
+    panel: str = "share"
 
 
 CUE_SPECS: tuple[CueSpec, ...] = (
-    CueSpec("lane_confidence", 0.0, 1.0, Worsens.WHEN_LOWER, 0.0),
-    CueSpec("brightness", 0.0, 255.0, Worsens.AWAY_FROM_BAND, None),
-    CueSpec("occlusion", 0.0, 1.0, Worsens.WHEN_HIGHER, 1.0),
-    CueSpec("obstacle_range_m", 0.0, math.inf, Worsens.WHEN_LOWER, 0.0),
-    CueSpec("qr_staleness_s", 0.0, math.inf, Worsens.WHEN_HIGHER, math.inf),
+    CueSpec("lane_confidence", 0.0, 1.0, Worsens.WHEN_LOWER, 0.0, unit="0..1", calm=1.0, panel="share"),
+    CueSpec("brightness", 0.0, 255.0, Worsens.AWAY_FROM_BAND, None, unit="grey level 0..255", span=255.0, panel="light"),
+    CueSpec("occlusion", 0.0, 1.0, Worsens.WHEN_HIGHER, 1.0, unit="share hidden 0..1", calm=0.0, panel="share"),
+    CueSpec("obstacle_range_m", 0.0, math.inf, Worsens.WHEN_LOWER, 0.0, unit="m", calm=math.inf, span=10.0, panel="range"),
+    CueSpec("qr_staleness_s", 0.0, math.inf, Worsens.WHEN_HIGHER, math.inf, unit="s", calm=0.0, span=40.0, panel="staleness"),
 )
+assert tuple(s.name for s in CUE_SPECS) == CUE_NAMES  # one order: the contract of evaluate_batch
 BRIGHTNESS = CUE_NAMES.index("brightness")
 OBSTACLE_RANGE = CUE_NAMES.index("obstacle_range_m")
 QR_STALENESS = CUE_NAMES.index("qr_staleness_s")
@@ -81,6 +91,12 @@ class Cues:
     def as_array(self) -> np.ndarray:
         """The cues as a float vector in CUE_NAMES order (non-numbers become NaN)."""
         return np.array(self.values(), dtype=float)
+
+
+def calm_values(brightness_band: tuple[float, float]) -> tuple[float, ...]:
+    """The calmest picture, in CUE_NAMES order: each cue at its calm value, brightness in the middle of the band."""
+    middle = (brightness_band[0] + brightness_band[1]) / 2.0
+    return tuple(middle if spec.calm is None else spec.calm for spec in CUE_SPECS)
 
 
 def unknown_note(name: str, raw: object) -> str | None:

@@ -2,21 +2,31 @@
 
     Exception
     ├── FearguardError              base of errors raised on purpose: the CLI prints ``Type: message``, exits 2
-    │   ├── CalibrationError        chessboard photos cannot calibrate (calibration.py)
+    │   ├── CalibrationError        chessboard photos cannot calibrate (vision/calibration.py)
+    │   ├── SteerImportError        a ``module:function`` that names no usable steering function (files/steer_import.py)
+    │   ├── SetupError              a vehicle, preset or steering function the testing kit cannot use (testing/subject.py)
+    │   ├── SimulatorMissing        gym-duckietown is not installed in this environment (worlds/duckietown/world.py)
+    │   ├── MapError                a map name or start the simulator does not know (worlds/duckietown/world.py)
     │   └── FileError               a file is wrong: ``FileError(path, where, problem)`` → "path, where: problem"
-    │       ├── RuleError           a rule-base file (fuzzy/loader.py, policy.py's [policy] table)
+    │       ├── RuleError           a rule-base file and its [policy] table (fuzzy/loader.py)
     │       ├── CameraError         camera.toml (camera.py)
+    │       ├── VehicleFileError    vehicle.toml, or a --vehicle that names neither a preset nor a file (vehicle.py)
     │       ├── ScenarioError       a scenario file (sim/scenario.py)
     │       ├── SourceError         a recording: video, image folder, Donkey Car tub (replay/sources.py)
-    │       └── SensorLogError      a sensor log, with --strict (replay/sensor_log.py); its place is a line number
+    │       ├── SensorLogError      a sensor log, with --strict (replay/sensor_log.py); its place is a line number
+    │       └── HistoryError        a counterexample history file (testing/history.py); its place is a line number
     ├── ValueError
     │   └── RuleSyntaxError         a rule's text does not parse (fuzzy/rule_text.py); the loader wraps it in RuleError
     └── RuntimeError
         └── EstimatorFault          a fault the simulator injects into a steering estimator (sim/loop.py)
-    UserWarning
-    └── SensorLogWarning            something in a sensor log is ignored, the log is still used
 
-Every file is read through ``reader.py`` (bounded size and nesting, strict tables), so a malformed file
+    UserWarning
+    ├── SensorLogWarning            something in a sensor log is ignored, the log is still used
+    └── CameraPitchWarning          the lane lines meet away from the horizon the camera model assumes (replay/pitch.py)
+
+Each module that raises one imports it from here (its old import path keeps working: ``fearguard.vehicle.VehicleFileError``).
+
+Every file is read through ``files/reader.py`` (bounded size and nesting, strict tables), so a malformed file
 is always one of the ``FileError`` kinds above, naming the file, the line and the key.
 ``FearGuard.step`` never raises any of these: faults at run time become safe commands.
 """
@@ -81,6 +91,10 @@ class SensorLogWarning(UserWarning):
     """Something in a sensor log is ignored (unknown columns) but the log is still used."""
 
 
+class CameraPitchWarning(UserWarning):
+    """The lane lines' vanishing point lies more than a few degrees from the horizon the camera model assumes."""
+
+
 # -- quoting foreign values in messages --------------------------------------------------------
 DESCRIBE_CHARS = 80  # [characters] of a foreign value quoted in a message or a reason
 
@@ -101,3 +115,31 @@ def describe_exception(exc: BaseException) -> str:
     except Exception:  # an exception whose __str__ raises must not escape the handler that reports it
         text = "<message unprintable>"
     return f"{type(exc).__name__}: {text}"
+
+
+class VehicleFileError(FileError):
+    """A vehicle.toml that cannot be used (or a --vehicle that names neither a preset nor a file): names the key."""
+
+
+class HistoryError(FileError):
+    """A history file (a counterexample) cannot be read: names the file, the line and the field."""
+
+    def __init__(self, path: str | Path, line: int | None, problem: str) -> None:
+        self.line = line
+        super().__init__(path, f"line {line}" if line else "", problem)
+
+
+class SteerImportError(FearguardError):
+    """A ``module:function`` that does not name a usable steering function."""
+
+
+class SetupError(FearguardError):
+    """A vehicle file, preset or steering function given to the testing kit cannot be used."""
+
+
+class SimulatorMissing(FearguardError):
+    """gym-duckietown is not installed in this Python environment."""
+
+
+class MapError(FearguardError):
+    """A map name or start the simulator does not know."""

@@ -17,7 +17,8 @@ class FearLevel(IntEnum):
     VERY_HIGH = 4
 
 
-LEVEL_NAMES: tuple[str, ...] = tuple(level.name.lower() for level in FearLevel)
+LEVEL_NAMES: tuple[str, ...] = tuple(level.name.lower() for level in FearLevel)  # the rule files' fear terms
+LEVEL_ORDER: tuple[str, ...] = tuple(level.name for level in FearLevel)  # as logs and tables name them, lowest first
 
 
 class Cause(Enum):

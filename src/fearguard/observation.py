@@ -56,7 +56,12 @@ class LeadBox:
 
 @dataclass(frozen=True)
 class Observation:
-    """What the car knows at one instant. Give ``cues`` to skip perception (cue-level use)."""
+    """What the car knows at one instant. Give ``cues`` to skip perception (cue-level use).
+
+    ``steering_deg``: the wrapped estimator's angle when the caller already holds it (a Donkey pilot's, an RL agent's):
+    validated exactly like a steering function's answer, and the steering function is not called. ``lead`` is a
+    ``Lead``; a detector's box in frame pixels is ``lead_box`` (a ``LeadBox`` given as ``lead`` is moved there).
+    """
 
     t_s: float
     speed_mps: float = 0.0
@@ -65,8 +70,15 @@ class Observation:
     ultrasonic_range_m: float | None = None
     odometer_m: float | None = None
     qr_payload: str | None = None
-    lead: Lead | LeadBox | None = None  # a Lead, or a box from an external detector (frame pixels)
+    lead: Lead | None = None  # the vehicle ahead (a LeadBox given here is moved to lead_box)
     ultrasonic_echo_s: float | None = None  # raw HC-SR04 echo time, used when ultrasonic_range_m is None
     # rate of change of the obstacle range (m/s, − = approaching) when the caller knows it (radar, simulator: the
     # lead's speed minus the ego's); None: estimated from successive ranges
     range_rate_mps: float | None = None
+    steering_deg: float | None = None  # [deg, + = left] the estimator's angle, when the caller holds it (None: ask ``steer``)
+    lead_box: LeadBox | None = None  # a box from an external detector (frame pixels): perception turns it into a Lead
+
+    def __post_init__(self) -> None:
+        if isinstance(self.lead, LeadBox):  # the contract's ``lead=`` took a box too: it keeps working
+            object.__setattr__(self, "lead_box", self.lead if self.lead_box is None else self.lead_box)
+            object.__setattr__(self, "lead", None)

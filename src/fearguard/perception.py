@@ -19,12 +19,14 @@ import numpy as np
 from fearguard.camera import CameraModel
 from fearguard.cues import Cues
 from fearguard.errors import describe
+from fearguard.lane import LaneGeometry
 from fearguard.observation import Lead, LeadBox, Observation
 from fearguard.readings import reading
 from fearguard.sensors.localisation import LocalisationState, QrLocaliser
 from fearguard.sensors.ultrasonic import RangeEstimate, UltrasonicFilter
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.frame import FrameAnalysis, FramePipeline
+from fearguard.vision.ground import lane_geometry
 from fearguard.vision.obstacle import Obstacle
 
 FROZEN_S = 1.0  # [s] frames byte-identical for longer than this: the camera froze (a real camera always has noise);
@@ -61,6 +63,8 @@ class Perceived:
     alerts: tuple[str, ...]  # readings unknown or rejected: always worth reporting
     facts: tuple[str, ...] = ()  # the measurements behind the cues: reported when fear is up
     analysis: FrameAnalysis | None = None  # this frame's analysis by the pipeline; None when it did not run
+    lane: LaneGeometry | None = None  # the ego lane in metres on the ground (needs a camera with its mounting height)
+    lane_steering_deg: float | None = None  # the frame pipeline's own steering toward the lane centre (finite), if any
     range_estimate: RangeEstimate | None = None
     localisation: LocalisationState | None = None
     timings_ms: dict[str, float] = field(default_factory=dict)
@@ -116,7 +120,7 @@ class Perception:
         t = t_s if t_s is not None else _NAN
         reasons: list[str] = []  # alerts
         facts: list[str] = []
-        box = obs.lead if isinstance(obs.lead, LeadBox) else None
+        box = obs.lead_box if isinstance(obs.lead_box, LeadBox) else None
         analysis = self._vision(obs.frame, t, box, reasons, facts)
         seen = analysis if analysis is not None else _UNSEEN
         t1 = clock()
@@ -130,8 +134,18 @@ class Perception:
         timings.update(vision=(t1 - t0) * 1e3, ultrasonic=(t2 - t1) * 1e3, localisation=(t3 - t2) * 1e3)
         cues = Cues(lane_confidence=seen.lane_confidence, brightness=seen.brightness, occlusion=seen.occlusion,
                     obstacle_range_m=range_m, qr_staleness_s=staleness)
-        return Perceived(cues=cues, lead=lead, alerts=tuple(reasons), facts=tuple(facts), analysis=analysis,
-                         range_estimate=estimate, localisation=loc, timings_ms=timings)
+        lane, lane_steering = self._lane(analysis)
+        return Perceived(cues=cues, lead=lead, alerts=tuple(reasons), facts=tuple(facts), analysis=analysis, lane=lane,
+                         lane_steering_deg=lane_steering, range_estimate=estimate, localisation=loc, timings_ms=timings)
+
+    def _lane(self, analysis: FrameAnalysis | None) -> tuple[LaneGeometry | None, float | None]:
+        """The lane as a measurement for policy: its ground geometry (camera with mounting height) and the pipeline's
+        own steering toward it (None unless finite)."""
+        if analysis is None:
+            return None, None
+        steering = analysis.steering_deg if analysis.steering_deg is not None and math.isfinite(analysis.steering_deg) else None
+        geometry = lane_geometry(analysis.left, analysis.right, analysis.region, analysis.scale, self.camera, analysis.steering_deg)
+        return geometry, steering
 
     # -- camera ---------------------------------------------------------------------------------
     def _vision(self, frame: object, t: float, box: LeadBox | None, reasons: list[str], facts: list[str]) -> FrameAnalysis | None:

@@ -23,7 +23,6 @@ from fearguard.errors import describe, describe_exception
 from fearguard.fear import Cause, FearLevel, FearResult
 from fearguard.fuzzy.loader import load_rules
 from fearguard.fuzzy.rulebase import RuleBase
-from fearguard.lane_check import LaneCheck, lane_check
 from fearguard.observation import Lead, Observation  # Observation re-exported: fearguard.supervisor.Observation keeps working
 from fearguard.perception import FrameSteering, Perceived, Perception, clamp_to_sensor
 from fearguard.policy import (
@@ -34,11 +33,9 @@ from fearguard.policy import (
     active_causes,
     closing_speed_from_ranges,
     emergency_plan,
-    envelope_speed_mps,
     fear_speed_mps,
     imminent_collision,
     lateral_speed_mps,
-    lead_speed_mps,
     next_mode,
     next_recovery,
     oscillating,
@@ -48,13 +45,23 @@ from fearguard.policy import (
     recovery_status,
     watchdog_s,
 )
+from fearguard.policy.decision import (
+    EmergencyChoice,
+    emergency_step,
+    envelope_step,
+    first_limit_mps,
+    lane_step,
+    limit_reason,
+    measured_speed,
+    motion_reasons,
+    rule_reasons,
+)
+from fearguard.policy.lane_check import LaneCheck, lane_check
 from fearguard.readings import finite_reading
 from fearguard.steering_deadline import SteeringDeadline
 from fearguard.vehicle import VehicleLimits
-from fearguard.vision.ground import lane_geometry
 
 SteeringFunction = Callable[[Any], float]
-TOP_RULES_IN_REASONS = 3  # [-] rules quoted in a command's reasons
 PERIOD_MEMORY = 9  # [frames] gaps between frames whose median is the typical frame period (watchdog)
 RANGE_MEMORY = 16  # [frames] obstacle ranges kept for the closing speed at cue level
 
@@ -98,6 +105,9 @@ class _State:
 class FearGuard:
     """Fuzzy affective safety supervisor around a steering function (frame → degrees, + = left).
 
+    ``steer`` may be None when every Observation brings its ``steering_deg`` (a caller that already holds the angle:
+    a Donkey pilot, an RL agent); a frame without one is then a fault.
+
     A ``FrameSteering`` (``HoughLaneSteering``) shares its frame pipeline: each frame is analysed once,
     for the cues and the steering. Its camera is the supervisor's camera; giving another one is a
     ``ValueError`` (``camera=None`` takes the steering's).
@@ -109,7 +119,7 @@ class FearGuard:
 
     def __init__(
         self,
-        steer: SteeringFunction,
+        steer: SteeringFunction | None,
         rules: RuleBase | str | None = None,
         vehicle: VehicleLimits | None = None,
         camera: CameraModel | None = None,
@@ -186,7 +196,7 @@ class FearGuard:
         """Cues from the observation (given, or measured by perception); absent sensors neutral, failed ones worst."""
         notes: list[str] = []
         perceived: Perceived | None = None
-        lead = obs.lead if isinstance(obs.lead, Lead) else None
+        lead = obs.lead if isinstance(obs.lead, Lead) else None  # a LeadBox is perception's (Observation.lead_box)
         if isinstance(obs.cues, Cues):
             raw = [getattr(obs.cues, name) for name in CUE_NAMES]
             values = obs.cues.values()
@@ -220,7 +230,12 @@ class FearGuard:
         return clamp_to_sensor(range_m, v, notes)
 
     def _steering(self, obs: Observation, perceived: Perceived | None) -> tuple[float, str]:
-        """The wrapped steering's angle: from this frame's analysis for a FrameSteering, else from the frame."""
+        """The wrapped estimator's angle: given in the observation (the caller holds it), else from this frame's analysis
+        for a FrameSteering, else the steering function on the frame — each validated the same way."""
+        if obs.steering_deg is not None:
+            return self._validated(obs.steering_deg, "the given steering_deg")
+        if self.steer is None:
+            return 0.0, "fault: no steering: give Observation.steering_deg or a steering function"
         analysis = perceived.analysis if perceived is not None else None
         if self._frame_steering is not None and analysis is not None:
             call, arg = self._frame_steering.steer_from, analysis
@@ -235,9 +250,14 @@ class FearGuard:
                 raw = call(arg)
         except Exception as exc:  # the wrapped estimator is foreign code: any failure is a fault
             return 0.0, f"fault: steering function raised {describe_exception(exc)}"
+        return self._validated(raw, "steering function returned")
+
+    def _validated(self, raw: object, what: str) -> tuple[float, str]:
+        """A finite angle within the vehicle's steering range, or a fault saying what arrived."""
         value = finite_reading(raw)
         if value is None:
-            return 0.0, f"fault: steering function returned {describe(raw)}, not a finite number"
+            says = f"{what} {describe(raw)}" if what.endswith("returned") else f"{what} is {describe(raw)}"
+            return 0.0, f"fault: {says}, not a finite number"
         limit = self.vehicle.max_steering_deg
         if abs(value) > limit:
             return 0.0, f"fault: steering {value:+.1f} deg outside ±{limit:.1f} deg"
@@ -247,10 +267,9 @@ class FearGuard:
         self, obs: Observation, t: float, cues: Cues, result: FearResult, steering: float, notes: list[str],
         lead: Lead | None, perceived: Perceived | None,
     ) -> Command:
+        """Advance the state by one frame and answer: the named steps of ``policy.decision`` over this frame's facts."""
         st, v, cfg = self._state, self.vehicle, self.rules.policy
-        speed = finite_reading(obs.speed_mps)
-        speed = speed if speed is not None and speed >= 0 else None
-        speed_now = v.max_speed_mps if speed is None else speed  # unknown speed: assume the worst
+        speed, speed_now = measured_speed(obs.speed_mps, v)
         range_m = self._range_for_policy(cues)
         closing = self._closing_speed(obs, t, range_m, perceived)
         imminent = imminent_collision(range_m, speed_now, v, closing)
@@ -259,41 +278,22 @@ class FearGuard:
         st.mode, event = next_mode(st.mode, result.fear, t, at_once=imminent, cfg=cfg, cause_fears=result.cause_fears, over=over)
         dt = 0.0 if st.last_t_s is None else t - st.last_t_s
         fear_limit = fear_speed_mps(result.fear, self.rules.level_anchors, cfg, v)
-        # nothing in range: an obstacle may stand just beyond what the range sensor sees (stop within the seen distance)
-        seen_m = range_m if math.isfinite(range_m) or not v.has_ultrasonic else v.ultrasonic_max_range_m
-        envelope = envelope_speed_mps(seen_m, v, lead_speed_mps(speed, closing) if seen_m == range_m else 0.0)
+        envelope = envelope_step(range_m, speed, closing, v)
         cause = self._dominant_cause(result, range_m)
         reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {cause.value}"]
         road_calm = result.cause_fears[Cause.ROAD] < cfg.caution_fear
+        lane_now = perceived.lane_steering_deg if perceived is not None else None
         check = self._lane_check(perceived, steering, speed_now) if road_calm else None
-        wanted, caps, mode, strategy = steering, [fear_limit, envelope], st.mode.mode, Strategy.PASS_THROUGH
-        if check is not None:
-            st.estimator_distrusted = check.override_deg is not None
-        if check is not None and check.override_deg is not None:
-            wanted, mode = check.override_deg, Mode.CAUTION if mode is Mode.NORMAL else mode
-            caps.append(cfg.lane_check_fraction * v.max_speed_mps)
-            reasons.append(check.why)
-        elif check is None and st.estimator_distrusted:  # the check cannot run now: do not go back to a faulty estimator
-            seen_now = _lane_steering(perceived)  # a stale angle held for seconds drives out of a bending lane
-            wanted, mode = seen_now if seen_now is not None else st.trusted_steering_deg, Mode.CAUTION if mode is Mode.NORMAL else mode
-            caps.append(cfg.lane_check_fraction * v.max_speed_mps)
-            source = "steering by the lane geometry seen now" if seen_now is not None else "holding the lane geometry's last"
-            reasons.append(f"lane check: the estimator steered out of the lane when last checked: {source} {wanted:+.1f} deg")
+        choice = lane_step(check, st.estimator_distrusted, steering, lane_now, st.trusted_steering_deg, cfg, v)
+        st.estimator_distrusted = choice.distrusted
+        wanted, caps, strategy = choice.steering_deg, [fear_limit, envelope.speed_mps, choice.cap_mps], Strategy.PASS_THROUGH
+        mode = Mode.CAUTION if choice.caution and st.mode.mode is Mode.NORMAL else st.mode.mode
+        reasons.extend([choice.reason] if choice.reason else [])
         if st.mode.mode is Mode.EMERGENCY:
-            active = active_causes(result.cause_fears, st.mode, cfg)
-            eligible, seen = recovery_eligible(st.mode, active, range_m, lead, imminent), self._lane_seen(cues, perceived)
-            st.recovery, creep = next_recovery(st.recovery, eligible, t, dt, speed_now, cfg, seen)
-            plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t)
-            strategy, cause = plan.strategy, plan.cause or cause
+            plan = self._emergency(result, range_m, lead, imminent, cues, perceived, t, dt, speed_now, wanted)
+            strategy, cause, wanted = plan.strategy, plan.cause or cause, plan.steering_deg
             caps.append(plan.cap_mps)
-            wanted = plan.steering_deg if plan.steering_deg is not None else wanted
-            reasons.append(f"EMERGENCY {strategy.name}: {plan.why}")
-            lane_steer = _lane_steering(perceived)
-            if creep and lane_steer is not None:  # creep closed-loop on what is seen of the lane
-                wanted = lane_steer
-                reasons.append(f"creep steering by the lane geometry seen now: {lane_steer:+.1f} deg")
-            status = "" if creep else recovery_status(st.recovery, eligible, cfg, t, seen)
-            reasons.extend([status] if status and strategy is Strategy.STOP else [])
+            reasons.extend(plan.reasons)
         else:
             st.recovery = Recovery()  # a new EMERGENCY starts with the full re-acquisition budget
             if road_calm:
@@ -301,28 +301,32 @@ class FearGuard:
         out_steering = self._steer_out(wanted, dt, reasons)
         lateral = lateral_speed_mps(max(abs(steering), abs(out_steering)), v)
         caps.append(lateral)
-        if imminent:
-            reasons.append(f"imminent collision: obstacle at {range_m:.2f} m, no braking within "
-                           f"{v.max_decel_mps2:.1f} m/s² avoids it from {speed_now:.2f} m/s")
-        elif envelope < speed_now and math.isfinite(range_m):
-            reasons.append(f"proper response: inside the safe distance of the object at {range_m:.2f} m "
-                           f"(its speed {lead_speed_mps(speed, closing):.2f} m/s): braking to {envelope:.2f} m/s")
-        if event:
-            reasons.append(event)
+        reasons.extend(motion_reasons(imminent, envelope.speed_mps, range_m, speed_now, speed, closing, v))
+        reasons.extend([event] if event else [])
         target = min(caps)
-        previous = st.limit_mps if st.limit_mps is not None else min(speed_now if speed is not None else 0.0, v.max_speed_mps)
-        limit = max(0.0, rate_limited_mps(previous, target, dt, cfg))
+        limit = max(0.0, rate_limited_mps(st.limit_mps if st.limit_mps is not None else first_limit_mps(speed, v), target, dt, cfg))
         st.last_t_s, st.limit_mps = t, limit
-        reasons.append(self._limit_reason(limit, fear_limit, envelope, target, seen_m, lateral))
-        if result.level > FearLevel.VERY_LOW or mode is not Mode.NORMAL:
-            reasons.extend(f"rule {text!r} fired {s:.2f}" for text, s in result.top_rules(TOP_RULES_IN_REASONS))
-            reasons.extend(perceived.facts if perceived is not None else ())
+        reasons.append(limit_reason(limit, fear_limit, envelope.speed_mps, target, envelope.seen_m, lateral))
+        reasons.extend(rule_reasons(result, mode, perceived.facts if perceived is not None else ()))
         reasons.extend(notes)
         return Command(
             steering_deg=out_steering, speed_limit_mps=limit, mode=mode, strategy=strategy, fear=result.fear,
-            fear_level=result.level, cues=cues, reasons=tuple(reasons), fear_limit_mps=fear_limit, envelope_mps=envelope,
+            fear_level=result.level, cues=cues, reasons=tuple(reasons), fear_limit_mps=fear_limit, envelope_mps=envelope.speed_mps,
             cause=cause, perceived=perceived, closing_speed_mps=math.nan if closing is None else closing,
         )
+
+    def _emergency(
+        self, result: FearResult, range_m: float, lead: Lead | None, imminent: bool, cues: Cues, perceived: Perceived | None,
+        t: float, dt: float, speed_now: float, wanted: float,
+    ) -> EmergencyChoice:
+        """In EMERGENCY: advance the recovery (creep after a road-picture stop), then the plan of the active causes."""
+        st, cfg = self._state, self.rules.policy
+        active = active_causes(result.cause_fears, st.mode, cfg)
+        eligible, seen = recovery_eligible(st.mode, active, range_m, lead, imminent), self._lane_seen(cues, perceived)
+        st.recovery, creep = next_recovery(st.recovery, eligible, t, dt, speed_now, cfg, seen)
+        plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, self.vehicle, creep, t)
+        status = "" if creep else recovery_status(st.recovery, eligible, cfg, t, seen)
+        return emergency_step(plan, creep, perceived.lane_steering_deg if perceived is not None else None, wanted, status)
 
     def _lane_seen(self, cues: Cues, perceived: Perceived | None) -> bool:
         """Something of the lane is seen (a creep can re-acquire it), or the camera froze (only moving tells a frozen
@@ -364,14 +368,12 @@ class FearGuard:
         return None if closing is None else max(closing, -bound)
 
     def _lane_check(self, perceived: Perceived | None, steering: float, speed_now: float) -> LaneCheck | None:
-        """The lane-keeping plausibility check on this frame's ground-plane lane (frames with a camera model only)."""
-        analysis = perceived.analysis if perceived is not None else None
-        if analysis is None:
+        """The lane-keeping plausibility check on this frame's ground-plane lane (perception measures it: frames with a
+        camera model that knows its mounting height only)."""
+        if perceived is None or perceived.analysis is None:
             return None
-        geometry = lane_geometry(analysis.left, analysis.right, analysis.region, analysis.scale, self.camera,
-                                 analysis.steering_deg)
         cfg = self.rules.policy
-        return lane_check(geometry, steering, speed_now, self.vehicle, cfg.lane_check_lookahead_s, cfg.lane_check_min_deg)
+        return lane_check(perceived.lane, steering, speed_now, self.vehicle, cfg.lane_check_lookahead_s, cfg.lane_check_min_deg)
 
     def _dominant_cause(self, result: FearResult, range_m: float) -> Cause:
         """The cause with the largest fear among those that can apply to this car: a collision needs a range sensor or
@@ -388,18 +390,6 @@ class FearGuard:
     def _range_for_policy(cues: Cues) -> float:
         """Obstacle range for the envelope, unknown meaning what it means for fear (worst: 0)."""
         return worst_filled(cues.values(), 0.0)[0][OBSTACLE_RANGE]
-
-    @staticmethod
-    def _limit_reason(limit: float, fear_limit: float, envelope: float, target: float, range_m: float, lateral: float) -> str:
-        if limit < target - 1e-12:
-            return f"speed limit {limit:.2f} m/s: rising at the comfort acceleration toward {target:.2f} m/s"
-        if envelope <= fear_limit and envelope <= target + 1e-12 and not math.isinf(envelope):
-            return f"speed limit {limit:.2f} m/s: safe distance envelope for an obstacle at {range_m:.2f} m"
-        if lateral <= target + 1e-12:
-            return f"speed limit {limit:.2f} m/s: lateral acceleration at this steering angle"
-        if fear_limit <= target + 1e-12:
-            return f"speed limit {limit:.2f} m/s: set by fear"
-        return f"speed limit {limit:.2f} m/s: set by the emergency strategy"
 
     # -- faults ---------------------------------------------------------------------------------
     def _fault_command(
@@ -426,9 +416,3 @@ class FearGuard:
             steering_deg=held, speed_limit_mps=0.0, mode=Mode.EMERGENCY, strategy=Strategy.STOP, fear=fear, fear_level=level,
             cues=cues, reasons=reasons, fear_limit_mps=0.0, envelope_mps=0.0, perceived=perceived,
         )
-
-
-def _lane_steering(perceived: Perceived | None) -> float | None:
-    """The lane geometry's steering of this frame (the frame pipeline's own estimate), None when it has none."""
-    lane = perceived.analysis.steering_deg if perceived is not None and perceived.analysis is not None else None
-    return lane if lane is not None and math.isfinite(lane) else None

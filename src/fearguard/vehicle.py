@@ -17,8 +17,8 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from fearguard.errors import FearguardError
-from fearguard.reader import Table, TomlSource, read_toml
+from fearguard.errors import VehicleFileError  # defined in errors.py, importable here
+from fearguard.files.reader import Table, TomlSource, read_toml
 
 ROUTE_NAME = re.compile(r"[A-Za-z0-9_-]+")  # the QR payload's route name (sensors/localisation.py)
 LOCALISER_SPEED_MARGIN = 1.2  # [-] without odometer a QR fix may move at most 1.2 × max speed since the last one
@@ -122,14 +122,6 @@ PRESETS: MappingProxyType[str, VehicleLimits] = MappingProxyType({
                         width_m=1.8, max_lateral_accel_mps2=3.0, max_steering_rate_dps=60.0, lead_max_decel_mps2=8.0,
                         max_closing_speed_mps=45.0),
 })
-
-
-class VehicleFileError(FearguardError):
-    """A vehicle.toml that cannot be used: names the file, the key and the fix."""
-
-    def __init__(self, path: str | Path, where: str, problem: str) -> None:
-        self.path, self.where, self.problem = str(path), where, problem
-        super().__init__(f"{path}: {where}: {problem}")
 
 
 def load_vehicle(path: str | Path) -> VehicleLimits:

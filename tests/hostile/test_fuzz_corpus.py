@@ -40,7 +40,8 @@ def test_fuzzed_observations_and_file_mutants_give_no_traceback_unsafe_command_o
     assert summary["frame_observations"] > 0 and summary["expected_faults"] > 0
     assert (summary["tracebacks"], summary["unsafe_commands"], summary["internal_errors"]) == (0, 0, 0), summary["examples"]
     kinds = {k.split(":")[0] for k in summary["file_outcomes"]}
-    assert kinds == {"rules", "vehicle", "camera", "counterexample", "scenario", "sensor_csv", "sensor_jsonl", "tub_manifest", "tub_catalog"}
+    assert kinds == {"rules", "vehicle", "camera", "counterexample", "scenario", "sensor_csv", "sensor_jsonl", "tub_manifest",
+                     "tub_catalog"}
 
 
 def test_the_oracle_catches_an_unsafe_command_and_an_unreported_fault(campaign) -> None:

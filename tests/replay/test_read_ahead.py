@@ -12,9 +12,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from fearguard.outputs.report import read_jsonl
 from fearguard.replay.read_ahead import read_ahead, usable_cores
 from fearguard.replay.run import ReplayOptions, replay
-from fearguard.report import read_jsonl
 
 VIDEO = Path("road") / "video" / "solidWhiteRight.mp4"
 

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from fearguard.cli import main
+from fearguard.outputs.report import read_jsonl
 from fearguard.replay.run import ReplayOptions, replay
-from fearguard.report import read_jsonl
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""fearguard.kalman: filterpy's filters without scipy.stats (or scipy.ndimage, scipy.linalg) until a likelihood is asked
+"""fearguard.sensors.kalman: filterpy's filters without scipy.stats (or scipy.ndimage, scipy.linalg) until a likelihood is asked
 for, and the real modules for everyone else. Each check runs in a fresh interpreter (imports are process-wide)."""
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ def test_a_fearguard_and_its_filters_do_not_import_scipy_stats_ndimage_or_linalg
 def test_process_noise_is_filterpys_block_matrix():
     probe = (
         "import numpy as np\n"
-        "from fearguard.kalman import white_noise_q\n"
+        "from fearguard.sensors.kalman import white_noise_q\n"
         "q = white_noise_q(dim=2, dt=0.05, var=0.7)\n"
         "from filterpy.common import Q_discrete_white_noise\n"
         "print(np.array_equal(q, Q_discrete_white_noise(dim=2, dt=0.05, var=0.7)))"
@@ -38,7 +38,7 @@ def test_process_noise_is_filterpys_block_matrix():
 def test_scipy_linalg_imported_after_is_the_real_module_and_filterpy_calls_it():
     probe = (
         "import sys, numpy as np\n"
-        "from fearguard.kalman import kalman_filter\n"
+        "from fearguard.sensors.kalman import kalman_filter\n"
         "kalman_filter(dim_x=2, dim_z=1)\n"
         "before = 'scipy.linalg' in sys.modules\n"
         "from filterpy.kalman import MerweScaledSigmaPoints\n"
@@ -54,7 +54,7 @@ def test_scipy_linalg_imported_after_is_the_real_module_and_filterpy_calls_it():
 def test_scipy_linalg_already_imported_is_what_filterpy_gets():
     probe = (
         "import sys, scipy.linalg\n"
-        "from fearguard.kalman import kalman_filter\n"
+        "from fearguard.sensors.kalman import kalman_filter\n"
         "kalman_filter(dim_x=2, dim_z=1)\n"
         "import filterpy.kalman.UKF as ukf\n"
         "print(ukf.cholesky is scipy.linalg.cholesky, sys.modules['scipy.linalg'] is scipy.linalg)"
@@ -65,7 +65,7 @@ def test_scipy_linalg_already_imported_is_what_filterpy_gets():
 def test_the_likelihood_is_filterpys_own_once_asked_for():
     probe = (
         "import sys, numpy as np\n"
-        "from fearguard.kalman import kalman_filter, white_noise_q\n"
+        "from fearguard.sensors.kalman import kalman_filter, white_noise_q\n"
         "kf = kalman_filter(dim_x=2, dim_z=1)\n"
         "kf.x = np.array([[0.0], [1.0]]); kf.F = np.array([[1.0, 0.1], [0.0, 1.0]]); kf.H = np.array([[1.0, 0.0]])\n"
         "kf.P *= 4.0; kf.R *= 0.5; kf.Q = white_noise_q(dim=2, dt=0.1, var=1.0)\n"
@@ -80,7 +80,7 @@ def test_the_likelihood_is_filterpys_own_once_asked_for():
 
 def test_filterpy_stats_imported_after_is_the_real_module():
     probe = (
-        "from fearguard.kalman import kalman_filter\n"
+        "from fearguard.sensors.kalman import kalman_filter\n"
         "kalman_filter(dim_x=2, dim_z=1)\n"
         "import sys, filterpy, filterpy.stats\n"
         "from filterpy.stats import gaussian\n"
@@ -93,7 +93,7 @@ def test_filterpy_stats_imported_after_is_the_real_module():
 def test_filterpy_already_imported_is_used_as_it_is():
     probe = (
         "import sys, filterpy.kalman\n"
-        "from fearguard.kalman import kalman_filter\n"
+        "from fearguard.sensors.kalman import kalman_filter\n"
         "kf = kalman_filter(dim_x=4, dim_z=2)\n"
         "print(type(kf) is filterpy.kalman.KalmanFilter, kf.x.shape == (4, 1), 'scipy.stats' in sys.modules)"
     )
@@ -103,7 +103,7 @@ def test_filterpy_already_imported_is_used_as_it_is():
 def test_discrete_bayes_waits_and_is_the_real_module_when_imported():
     probe = (
         "import sys\n"
-        "from fearguard.kalman import kalman_filter\n"
+        "from fearguard.sensors.kalman import kalman_filter\n"
         "kalman_filter(dim_x=2, dim_z=1)\n"
         "before = 'scipy.ndimage' in sys.modules or 'filterpy.discrete_bayes' in sys.modules\n"
         "import numpy as np, filterpy, filterpy.discrete_bayes as db\n"

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from fearguard.cli import main
-from fearguard.report import read_jsonl
+from fearguard.outputs.report import read_jsonl
 from fearguard.sim.loop import run_scenario
 from fearguard.sim.scenario import load_scenario
 from fearguard.sim.suite import BENIGN, run_suite, scenario_files, suite_markdown

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 import fearguard as fg
-from fearguard.reader import TomlSource
+from fearguard.files.reader import TomlSource
 from fearguard.sim.qr import payload, place_boards
 from fearguard.sim.scenario import Scenario, ScenarioError, load_scenario
 

@@ -49,7 +49,7 @@ def broken_rules(tmp_path: Path, name: str, old: str, new: str) -> Path:
 def verify(tmp_path: Path, capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, str]:
     code = main(["verify", "--out", str(tmp_path / "cx"), "--seed", "1", *args])
     out = capsys.readouterr()
-    return code, out.out + out.err
+    return code, out.err + out.out  # stderr first: its progress lines (verify: invariant N ...) before the table's last line
 
 
 def verify_as_a_user(tmp_path: Path, *args: str) -> tuple[int, str]:
@@ -57,7 +57,7 @@ def verify_as_a_user(tmp_path: Path, *args: str) -> tuple[int, str]:
     inside a test worker hypothesis' state left by earlier tests can change which cases a search tries."""
     done = subprocess.run([sys.executable, "-m", "fearguard.cli", "verify", "--out", str(tmp_path / "cx"), "--seed", "1", *args],
                           capture_output=True, text=True, env=_env(), timeout=600)
-    return done.returncode, done.stdout + done.stderr
+    return done.returncode, done.stderr + done.stdout
 
 
 INVERTED = ('"IF obstacle_range_m IS far THEN fear IS very_low"', '"IF obstacle_range_m IS far THEN fear IS very_high"')
@@ -224,8 +224,7 @@ def test_the_three_line_user_test_runs_in_a_fresh_folder(tmp_path) -> None:
     done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-rs", "test_my_car.py"], cwd=tmp_path,
                           capture_output=True, text=True, env=_env(), timeout=600)
     assert done.returncode == 0, done.stdout + done.stderr
-    pending = sum(1 for inv in INVARIANTS if inv.pending)
-    assert f"{len(INVARIANTS) - pending} passed" in done.stdout and (f"{pending} skipped" in done.stdout or not pending), done.stdout
+    assert f"{len(INVARIANTS)} passed" in done.stdout, done.stdout
 
 
 @settings(max_examples=25)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens
+from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens, calm_values
 from fearguard.fear import Cause
 from fearguard.fuzzy.model import Group
 from fearguard.fuzzy.promises import Reach, check_promises
@@ -82,7 +82,7 @@ class ThresholdCheck:
 
 def check_thresholds(rb: RuleBase) -> ThresholdCheck:
     """Calm cues must stay below caution; every cue at its worst must bring each graded cause to emergency."""
-    calm = (1.0, sum(rb.brightness_band) / 2.0, 0.0, math.inf, 0.0)
+    calm = calm_values(rb.brightness_band)
     worst = rb.evaluate([math.nan] * len(CUE_NAMES))  # unknown = worst, both brightness extremes tried
     causes = dict.fromkeys(g.cause for g in rb.groups)
     return ThresholdCheck(calm, rb.evaluate(calm).fear, rb.policy.caution_fear, rb.policy.emergency_enter_fear,

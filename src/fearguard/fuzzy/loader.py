@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
+from dataclasses import fields
+from itertools import pairwise
 from pathlib import Path
 from typing import Any
 
@@ -21,12 +23,13 @@ import numpy as np
 from fearguard.cues import CUE_NAMES, CUE_SPECS
 from fearguard.errors import FearguardError, RuleError
 from fearguard.fear import LEVEL_NAMES, Cause, FearLevel
+from fearguard.files.reader import Table, TomlSource, number_list, read_toml, suggestion
 from fearguard.fuzzy.membership import SHAPES, Shape, universe_grid
 from fearguard.fuzzy.model import Group, Rule, Variable
 from fearguard.fuzzy.rule_text import RuleSyntaxError, atoms, parse_rule
 from fearguard.fuzzy.rulebase import RuleBase
-from fearguard.policy import PolicyConfig
-from fearguard.reader import Table, TomlSource, number_list, read_toml, suggestion
+from fearguard.policy.config import PolicyConfig
+from fearguard.readings import finite_reading
 
 MAX_UNIVERSE_POINTS = 100_001  # [-] a finer universe makes every evaluation slow for no accuracy
 PEAK_MEMBERSHIP = 0.99  # [-] a term must reach this inside its universe to be usable
@@ -61,7 +64,7 @@ def _build(data: Mapping[str, Any], src: TomlSource) -> RuleBase:
     if list(fear_var.terms) != list(LEVEL_NAMES):
         raise src.error("fear", f"the fear terms must be exactly {', '.join(LEVEL_NAMES)} in this order, got {', '.join(fear_var.terms)}")
     groups = _groups(_table(data, "groups", src), variables, src)
-    policy = PolicyConfig.from_table(src, data.get("policy", {}), "policy")
+    policy = policy_from_table(src, data.get("policy", {}), "policy")
     return RuleBase(path=src.path, name=name, variables=variables, fear_variable=fear_var, groups=groups, policy=policy)
 
 
@@ -191,3 +194,61 @@ def _rule(text: str, i: int, group: str, variables: dict[str, Variable], src: To
     if parsed.level not in LEVEL_NAMES:
         raise fail(f"unknown fear level {parsed.level!r} (levels: {', '.join(LEVEL_NAMES)})")
     return Rule(text, group, parsed.antecedent, FearLevel(LEVEL_NAMES.index(parsed.level)), parsed.weight, line)
+
+
+# -- the [policy] table: policy holds the numbers, the loader reads them -------------------------------
+_WHOLE_KEYS = ("enter_frames", "watchdog_frames", "recovery_max_creeps", "oscillation_flips")
+_POSITIVE_KEYS = ("watchdog_age_s", "recovery_creep_m", "recovery_creep_s", "recovery_max_total_m", "oscillation_deg",
+                  "lane_check_lookahead_s")
+
+
+def _fractions(t: Table, key: str) -> tuple[float, ...]:
+    value = t.data[key]
+    if not isinstance(value, Mapping):
+        raise t.fail(key, "must be a table like { very_low = 1.0, low = 0.8, ... }")
+    missing = [n for n in LEVEL_NAMES if n not in value]
+    extra = [k for k in value if k not in LEVEL_NAMES]
+    if missing or extra:
+        raise t.fail(key, f"needs exactly the levels {', '.join(LEVEL_NAMES)}; missing {missing}, unknown {extra}")
+    seq = [finite_reading(value[n]) for n in LEVEL_NAMES]
+    if not all(v is not None and 0.0 <= v <= 1.0 for v in seq):
+        raise t.fail(key, f"each fraction must be a number in [0, 1], got {[value[n] for n in LEVEL_NAMES]}")
+    fractions = tuple(float(v) for v in seq if v is not None)
+    if any(b > a for a, b in pairwise(fractions)):
+        raise t.fail(key, f"fractions must not increase with fear (monotone policy), got {list(fractions)}")
+    return fractions
+
+
+def policy_from_table(src: TomlSource, data: object, key_path: str = "policy") -> PolicyConfig:
+    """Validate a ``[policy]`` table with the strict reader; errors name the file, the line and the key."""
+    t = Table(src, data, key_path, [f.name for f in fields(PolicyConfig)])
+    values: dict[str, Any] = {}
+    for key in t.data:
+        if key == "speed_fraction":
+            values[key] = _fractions(t, key)
+        elif key in _WHOLE_KEYS:
+            values[key] = t.integer(key, low=0 if key == "recovery_max_creeps" else 1)
+        else:
+            values[key] = t.number(key)
+    cfg = PolicyConfig(**values)
+    for key, ok, problem in (
+        ("emergency_enter_fear", 0.0 < cfg.emergency_enter_fear <= 1.0, "must be in (0, 1]"),
+        ("emergency_exit_fear", 0.0 <= cfg.emergency_exit_fear < cfg.emergency_enter_fear,
+         "must be >= 0 and below emergency_enter_fear (hysteresis)"),
+        ("caution_fear", 0.0 < cfg.caution_fear <= cfg.emergency_enter_fear,
+         "must be in (0, emergency_enter_fear]"),
+        ("hold_s", cfg.hold_s >= 0.0, "must be >= 0"),
+        ("comfort_accel_mps2", cfg.comfort_accel_mps2 > 0.0, "must be > 0"),
+        ("crawl_fraction", 0.0 <= cfg.crawl_fraction <= 1.0, "must be in [0, 1]"),
+        ("follow_time_gap_s", cfg.follow_time_gap_s > 0.0, "must be > 0"),
+        ("follow_gain", cfg.follow_gain >= 0.0, "must be >= 0"),
+        *((k, getattr(cfg, k) > 0.0, "must be > 0") for k in _POSITIVE_KEYS),
+        ("recovery_dwell_s", cfg.recovery_dwell_s >= 0.0, "must be >= 0"),
+        ("standstill_mps", cfg.standstill_mps >= 0.0, "must be >= 0"),
+        ("lane_check_min_deg", cfg.lane_check_min_deg >= 0.0, "must be >= 0"),
+        ("lane_check_fraction", 0.0 <= cfg.lane_check_fraction <= 1.0, "must be in [0, 1]"),
+        ("recovery_min_confidence", 0.0 <= cfg.recovery_min_confidence <= 1.0, "must be in [0, 1]"),
+    ):
+        if not ok:
+            raise t.fail(key, f"{problem}, got {getattr(cfg, key)}")
+    return cfg

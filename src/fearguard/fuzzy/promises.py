@@ -26,7 +26,7 @@ from enum import Enum
 
 import numpy as np
 
-from fearguard.cues import CUE_NAMES, CUE_SPECS, Cues
+from fearguard.cues import CUE_NAMES, CUE_SPECS, Cues, calm_values
 from fearguard.fear import Cause
 from fearguard.fuzzy.model import Variable
 from fearguard.fuzzy.rulebase import RuleBase
@@ -72,18 +72,12 @@ class Promise:
 
     def cues(self, rules: RuleBase) -> Cues:
         """The calm picture with this cue at the promise's value."""
-        values = dict(zip(CUE_NAMES, calm_values(rules), strict=True))
+        values = dict(zip(CUE_NAMES, calm_values(rules.brightness_band), strict=True))
         values[self.cue] = self.value
         return Cues(**values)
 
     def text(self) -> str:
         return f"{self.cue} {self.value:g} alone ({self.where}, the other cues calm)"
-
-
-def calm_values(rules: RuleBase) -> tuple[float, ...]:
-    """The calmest picture: lane seen, brightness mid-band, nothing hidden, nothing in range, just localised."""
-    lo, hi = rules.brightness_band
-    return (1.0, (lo + hi) / 2.0, 0.0, math.inf, 0.0)
 
 
 def worst_values(name: str) -> tuple[float, ...]:

@@ -74,7 +74,7 @@ class RuleBase:
 
     def evaluate(self, cues: Cues | Sequence[float] | np.ndarray) -> FearResult:
         """Fear of one cue vector, with the rules that fired; unknown cues count as their worst."""
-        x = cues.values() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(5).tolist()
+        x = cues.values() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(len(CUE_NAMES)).tolist()
         return self._engine.evaluate(x)
 
     def evaluate_batch(self, x: np.ndarray) -> np.ndarray:
@@ -101,5 +101,5 @@ class RuleBase:
 
         if self._reference is None:
             self._reference = Reference(self.model)
-        x = cues.as_array() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(5)
+        x = cues.as_array() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(len(CUE_NAMES))
         return self._reference.fear(x)

@@ -109,7 +109,7 @@ class FearGuardPart:
         if len(channels) != 2:
             raise ValueError(f"channels must be (angle channel, throttle channel), got {channels!r}")
         self.vehicle = vehicle
-        self.guard = FearGuard(self._pilot_steering, rules=rules, vehicle=vehicle, camera=camera)
+        self.guard = FearGuard(None, rules=rules, vehicle=vehicle, camera=camera)  # the pilot's angle comes in each Observation
         self.has_tfmini, self.has_odom = has_tfmini, has_odom
         self.speed_lag_s = speed_lag_s
         self.clock = clock
@@ -117,7 +117,6 @@ class FearGuardPart:
         self.outputs = [*channels, *FEAR_OUTPUTS]
         self.types = ["float", "float", *FEAR_TYPES]  # for TubWriter: inputs += part.outputs; types += part.types
         self.last_command: Command | None = None
-        self._pilot_deg = math.nan
         self._reset_state()
 
     def _reset_state(self) -> None:
@@ -185,9 +184,6 @@ class FearGuardPart:
         self.guard.reset()
         self._reset_state()
 
-    def _pilot_steering(self, _frame: object) -> float:
-        return self._pilot_deg
-
     def _run(self, image: object, angle: object, throttle: object, sensors: tuple[object, ...]) -> tuple[float, float, float, str, float]:
         t = float(self.clock())
         if self._last_t_s is not None and t <= self._last_t_s:
@@ -203,14 +199,14 @@ class FearGuardPart:
             if not self._started:
                 held = 0.0 if a is None else max(-1.0, min(1.0, a))
                 return held, 0.0, 1.0, STARTING, 0.0
-        self._pilot_deg = donkey_to_deg(a, limits.max_steering_deg) if a is not None else math.nan
+        pilot_deg = donkey_to_deg(a, limits.max_steering_deg) if a is not None else math.nan
         range_m = range_cm / 100.0 if range_cm is not None and range_cm > 0 else None  # 0: no echo (unknown)
         if self.has_odom:
             speed = finite_reading(sensors[-1]) if sensors else None
             speed_mps = speed if speed is not None else math.nan  # unknown: the guard assumes the worst
         else:
             speed_mps = self._speed_mps
-        cmd = self.guard.step(Observation(t_s=t, speed_mps=speed_mps, frame=frame, ultrasonic_range_m=range_m))
+        cmd = self.guard.step(Observation(t_s=t, speed_mps=speed_mps, frame=frame, ultrasonic_range_m=range_m, steering_deg=pilot_deg))
         self.last_command = cmd
         limit = finite_reading(cmd.speed_limit_mps)
         limit = 0.0 if limit is None else max(0.0, limit)

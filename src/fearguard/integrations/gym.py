@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import gymnasium
@@ -301,9 +301,8 @@ class FearGuardShield(gymnasium.Wrapper):
                 "observe(env, obs, info) -> fearguard.Observation and act(action, command, env) -> action"
             )
         self.observe, self.act = observe, act
-        self._agent_steering_deg = 0.0
         self._steering_rad: float | None = None  # highway-env: the steering about to be sent (rad, + = right)
-        self.guard = FearGuard(lambda _frame: self._agent_steering_deg, rules=rules, vehicle=vehicle)
+        self.guard = FearGuard(None, rules=rules, vehicle=vehicle)  # the agent's steering arrives in each Observation
         self._last_obs: Any = None
         self._last_info: dict = {}
 
@@ -315,8 +314,10 @@ class FearGuardShield(gymnasium.Wrapper):
 
     def step(self, action: Any) -> tuple[Any, float, bool, bool, dict]:
         action, refusal = self._lane_change(action) if self.highway else (action, "")
-        self._agent_steering_deg = self._steering_deg(action)
-        cmd = self.guard.step(self.observe(self.env, self._last_obs, self._last_info))
+        observed = self.observe(self.env, self._last_obs, self._last_info)
+        if isinstance(observed, Observation):  # the agent's angle is the wrapped estimator's: the guard validates it
+            observed = replace(observed, steering_deg=self._steering_deg(action))
+        cmd = self.guard.step(observed)
         sent = self.act(action, cmd, self.env)
         obs, reward, terminated, truncated, info = self.env.step(sent)
         info = {**info, "fearguard": cmd, "fearguard_action": sent, "fearguard_lane_change": refusal}

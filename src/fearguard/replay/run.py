@@ -12,20 +12,26 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from fearguard.camera import CameraModel, load_camera
+from fearguard.drive.controllers import Guarded
+from fearguard.drive.interrupt import StopSignal
+from fearguard.drive.loop import run
+from fearguard.drive.world import Decision, Outcome, Sensed
 from fearguard.fuzzy.loader import load_rules
-from fearguard.interrupt import StopSignal
 from fearguard.observation import LeadBox, Observation
-from fearguard.recorder import CommandStats, Recorder
+from fearguard.outputs.recorder import CommandStats, Recorder
+from fearguard.outputs.report import json_value
+from fearguard.replay.bags import BagSource, BagTopics
+from fearguard.replay.pitch import PitchCheck
 from fearguard.replay.read_ahead import read_ahead, usable_cores
-from fearguard.replay.sensor_log import SensorLog, load_sensor_log
-from fearguard.replay.sources import SourceError, open_source, parse_position
-from fearguard.report import json_value
+from fearguard.replay.recordings import open_recording
+from fearguard.replay.sensor_log import Readings, load_sensor_log
+from fearguard.replay.sources import Frame, SourceError, parse_position
 from fearguard.supervisor import FearGuard
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.lane_steering import HoughLaneSteering
@@ -51,6 +57,8 @@ class ReplayOptions:
     vehicle: VehicleLimits = field(default_factory=VehicleLimits)  # its range sensor and QR are what the recording has (below)
     steer: Callable[[Any], float] | None = None  # the wrapped steering function, frame -> degrees (None: HoughLaneSteering)
     read_ahead: bool | None = None  # decode the next frames on another core (read_ahead.py); None: when there is one
+    mcap: bool = False  # also write run.mcap for Foxglove (outputs/mcap.py)
+    topics: BagTopics = field(default_factory=BagTopics)  # a ROS bag's topics (replay/bags.py); None fields: picked
 
 
 @dataclass(frozen=True)
@@ -74,8 +82,8 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
         raise SourceError(str(source_path), "every", f"must be a whole number >= 1, got {options.every!r}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    source = open_source(source_path, options.fps)
-    log_data: SensorLog | None = load_sensor_log(options.sensor_log, options.strict) if options.sensor_log else None
+    source = open_recording(source_path, options.fps, options.topics)
+    log_data: Readings | None = load_sensor_log(options.sensor_log, options.strict) if options.sensor_log else source.sensors
     camera: CameraModel | None = load_camera(options.camera) if options.camera else None
     has_us = log_data is not None and not options.no_ultrasonic and bool({"ultrasonic_range_m", "echo_s"} & set(log_data.columns))
     vehicle = replace(options.vehicle, has_ultrasonic=has_us, has_qr_localisation=options.qr_localisation)
@@ -87,29 +95,12 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     expected = _expected(source.expected_frames, start, stop_at, options.every)
     frames = source.iter_frames(start, stop_at, options.every)
     ahead = options.read_ahead if options.read_ahead is not None else usable_cores() > 1
-    if ahead:
-        frames = read_ahead(frames)
-    interrupted, began = False, time.perf_counter()
-    recorder = Recorder(out, fps=source.fps / options.every, video=options.video)
-    try:
-        with recorder:
-            for frame in frames:
-                obs = _observation(frame.t_s, frame.image_bgr, log_data, options.speed_mps)
-                cmd = guard.step(obs)
-                analysis = None
-                if recorder.video_path is not None:
-                    analysis = cmd.perceived.analysis if cmd.perceived is not None else None
-                recorder.frame(frame.index, frame.t_s, cmd, image=frame.image_bgr, analysis=analysis, caption=f"t {frame.t_s:.1f} s",
-                               fields=frame.log_fields)
-                if on_frame is not None:
-                    on_frame(recorder.frames, expected)
-                if stop:
-                    break
-    except KeyboardInterrupt:
-        interrupted = True
-    finally:
-        frames.close()  # the reader stops (and the source is closed) before its skips and end are summarised
-    interrupted = interrupted or bool(stop)
+    pitch = PitchCheck(camera)
+    world = RecordingWorld(read_ahead(frames) if ahead else frames, source.fps / options.every, log_data, options.speed_mps, pitch)
+    began = time.perf_counter()
+    recorder = Recorder(out, fps=world.fps, video=options.video, mcap=options.mcap)
+    ran = run(world, Guarded(guard), recorder, stop=stop, on_frame=on_frame, total=expected)  # closing the world stops the reader
+    interrupted = ran.interrupted
     elapsed = time.perf_counter() - began
     done = recorder.frames
     stats = recorder.stats
@@ -126,6 +117,11 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
         summary["stopped_by"] = stop.name
     if recorder.video_path is not None:
         summary["video"] = {"path": str(recorder.video_path), "frames": done, "rescaled_frames": recorder.video_frames_rescaled}
+    if recorder.mcap_path is not None:
+        summary["mcap"] = {"path": str(recorder.mcap_path), "frames": done}
+    summary["pitch_check"] = pitch.finish().to_json()
+    if isinstance(source, BagSource):
+        summary["bag_topics"] = dict(source.topics_used)
     summary = json_value(summary)
     recorder.write_summary(summary)
     if options.plots and not stop:
@@ -154,7 +150,36 @@ def _expected(total: int | None, start: int, stop: int | None, every: int) -> in
     return None if end is None else max(0, math.ceil((min(end, total or end) - start) / every))
 
 
-def _observation(t_s: float, image: Any, log: SensorLog | None, speed_mps: float | None) -> Observation:
+class RecordingWorld:
+    """A recording as a ``World``: its frames with the sensor readings of their times (a sensor log, or a bag's own
+    topics); ``act`` moves nothing (open loop: the recording's motion is fixed) but checks the camera's pitch against
+    the lane lines. Closing it stops the reader and closes the source."""
+
+    def __init__(self, frames: Iterator[Frame], fps: float, log: Readings | None, speed_mps: float | None,
+                 pitch: PitchCheck | None = None) -> None:
+        self.frames, self.fps, self.log, self.speed_mps, self.pitch = frames, fps, log, speed_mps, pitch
+        self._frame: Frame | None = None
+
+    def sense(self) -> Sensed | None:
+        frame = self._frame = next(self.frames, None)
+        if frame is None:
+            return None
+        return Sensed(frame.index, frame.t_s, _observation(frame.t_s, frame.image_bgr, self.log, self.speed_mps), frame.image_bgr)
+
+    def act(self, sensed: Sensed, decision: Decision) -> Outcome:
+        frame = self._frame
+        assert frame is not None  # act follows the sense that read it
+        if self.pitch is not None:
+            self.pitch.add(frame.t_s, decision.analysis, (frame.image_bgr.shape[1], frame.image_bgr.shape[0]))
+        return Outcome({"source_frame": frame.source_frame, **frame.log_fields}, f"t {sensed.t_s:.1f} s", stamp_ns=frame.stamp_ns)
+
+    def close(self) -> None:
+        close = getattr(self.frames, "close", None)
+        if close is not None:
+            close()
+
+
+def _observation(t_s: float, image: Any, log: Readings | None, speed_mps: float | None) -> Observation:
     """The Observation for one frame: the frame, and the sensor-log row valid at its time."""
     if log is None:
         return Observation(t_s, speed_mps if speed_mps is not None else math.nan, image)

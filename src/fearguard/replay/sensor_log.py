@@ -19,10 +19,10 @@ from bisect import bisect_right
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 from fearguard.errors import SensorLogError, SensorLogWarning
-from fearguard.reader import loads_json
+from fearguard.files.reader import loads_json
 from fearguard.readings import reading
 
 MAX_AGE_S = 0.25  # [s] default: a reading older than this is not used for a frame (5 frames at 20 Hz)
@@ -65,6 +65,17 @@ class SensorSample:
 
 
 NO_READING = SensorSample()  # what ``at`` returns when no row is recent enough
+
+
+class Readings(Protocol):
+    """Sensor readings aligned to frames by time: a SensorLog file, or the sensor topics of a ROS bag (replay/bags.py)."""
+
+    columns: tuple[str, ...]  # the readings present (a column present = the car has that sensor)
+    issues: tuple[LogIssue, ...]
+
+    def at(self, t_s: float, max_age_s: float = MAX_AGE_S) -> SensorSample:
+        """The readings valid at t_s (NO_READING when none is recent enough); never raises."""
+        ...
 
 
 @dataclass(frozen=True)

@@ -23,14 +23,17 @@ from dataclasses import dataclass, field
 from itertools import pairwise
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import cv2
 import numpy as np
 
 from fearguard.errors import SourceError
-from fearguard.reader import loads_json
+from fearguard.files.reader import loads_json
 from fearguard.readings import finite_reading, whole_number
+
+if TYPE_CHECKING:
+    from fearguard.replay.sensor_log import Readings
 
 DEFAULT_FPS = 20.0  # [Hz] frame rate assumed when none is known (Donkey Car's default DRIVE_LOOP_HZ)
 MAX_PLAUSIBLE_FPS = 1000.0  # [Hz] a container frame rate above this (or ≤ 0, NaN) is treated as missing
@@ -63,6 +66,8 @@ class Frame:
     image_bgr: np.ndarray  # uint8, H×W×3
     record: Mapping[str, Any]  # e.g. a tub's user/angle, user/throttle; an image folder's file name
     log_fields: Mapping[str, Any] = field(default_factory=lambda: _EMPTY_RECORD)  # added to the replay log (TUB_COMMANDS)
+    source_frame: int | str | None = None  # the picture in the recording: video frame, image file, tub index, bag stamp [ns]
+    stamp_ns: int | None = None  # [ns] the recording's own clock (a bag's receive time, a tub's _timestamp_ms), None: none
 
 
 @dataclass(frozen=True)
@@ -89,6 +94,7 @@ class FrameSource(ABC):
         self.skipped: list[Skip] = []
         self.stopped_early: str | None = None
         self.log_field_units: Mapping[str, str] = _EMPTY_RECORD  # units and sign of each field a Frame adds to the log
+        self.sensors: Readings | None = None  # sensor readings the recording carries itself (a bag's Range, Odometry, ...)
 
     def iter_frames(self, start: int = 0, stop: int | None = None, every: int = 1) -> Generator[Frame, None, None]:
         """Frames with start ≤ index < stop, every ``every``-th; resets ``skipped`` and ``stopped_early``."""
@@ -230,7 +236,7 @@ class VideoSource(FrameSource):
                     self._skip(index, "read but could not be converted to a BGR image")
                     continue
                 t_s = index / self.clock_fps if self.clock_fps else cap.get(cv2.CAP_PROP_POS_MSEC) / 1000.0
-                yield Frame(index, t_s, image, _EMPTY_RECORD)
+                yield Frame(index, t_s, image, _EMPTY_RECORD, source_frame=index)
         finally:
             cap.release()
 
@@ -281,7 +287,7 @@ class ImageFolderSource(FrameSource):
             if image is None:
                 self._skip(index, f"{file.name} {why}")
                 continue
-            yield Frame(index, index / self.fps, image, MappingProxyType({"file": file.name}))
+            yield Frame(index, index / self.fps, image, MappingProxyType({"file": file.name}), source_frame=file.name)
 
 
 # ---------------------------------------------------------------------------------------- Donkey tub
@@ -327,13 +333,7 @@ class TubSource(FrameSource):
                 break
         self.t0_ms = stamps[0] if stamps else 0.0  # t_s = 0 at the tub's first record (deleted or not)
         notes: list[str] = []
-        steps = [b - a for a, b in pairwise(stamps) if b > a]
-        if fps is None and steps:
-            fps = 1000.0 / statistics.median(steps)
-            notes.append(f"frame rate {fps:.3g} Hz estimated from _timestamp_ms (median interval); used by --from/--to in seconds")
-        elif fps is None:
-            fps = DEFAULT_FPS
-            notes.append(f"no usable _timestamp_ms to estimate the frame rate: --from/--to in seconds assume {DEFAULT_FPS:g} Hz")
+        fps = fps if fps is not None else estimate_fps(stamps, 1000.0, "_timestamp_ms", "no usable _timestamp_ms", notes)
         super().__init__(path, fps, expected, size, notes)
         self.log_field_units = MappingProxyType({key: meaning for channel, (key, meaning) in TUB_COMMANDS.items() if channel in inputs})
 
@@ -394,7 +394,20 @@ class TubSource(FrameSource):
                 self._skip(index, f"{image_path.relative_to(self.path)} {why} ({catalog} line {number})")
                 continue
             extra = MappingProxyType({k: v for k, v in record.items() if k not in self.image_keys})
-            yield Frame(index, (stamp - self.t0_ms) / 1000.0, image, extra, _tub_log_fields(record))
+            yield Frame(index, (stamp - self.t0_ms) / 1000.0, image, extra, _tub_log_fields(record), source_frame=index,
+                        stamp_ns=round(stamp * 1000) * 1000)  # via µs: an epoch in ns (~1.7e18) is beyond a float's 2**53
+
+
+def estimate_fps(stamps: list[float] | list[int], units_per_s: float, source: str, without: str, notes: list[str]) -> float:
+    """A recording's frame rate from its stamps: 1 / the median increasing interval (noted, naming ``source``), or
+    DEFAULT_FPS when there is none (noted, saying ``without``); used by --from/--to in seconds."""
+    steps = [b - a for a, b in pairwise(stamps) if b > a]
+    if steps:
+        fps = units_per_s / statistics.median(steps)
+        notes.append(f"frame rate {fps:.3g} Hz estimated from {source} (median interval); used by --from/--to in seconds")
+        return fps
+    notes.append(f"{without} to estimate the frame rate: --from/--to in seconds assume {DEFAULT_FPS:g} Hz")
+    return DEFAULT_FPS
 
 
 def _tub_log_fields(record: Mapping[str, Any]) -> Mapping[str, Any]:
@@ -449,7 +462,8 @@ def _read_manifest(manifest: Path) -> tuple[list[str], list[str], dict[str, Any]
 
 
 def open_source(path: str | Path, fps: float | None = None) -> FrameSource:
-    """Open a video file, a folder of images, or a Donkey Car tub folder (detected from what is there)."""
+    """Open a video file, a folder of images, or a Donkey Car tub folder (detected from what is there); ROS bags too:
+    ``replay.recordings.open_recording``."""
     path = Path(path)
     if fps is not None and not ((finite_reading(fps) or 0.0) > 0):
         raise SourceError(path, "fps", f"must be a positive number of frames per second, got {fps!r}")

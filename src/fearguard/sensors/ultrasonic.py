@@ -22,7 +22,7 @@ from enum import Enum
 import numpy as np
 
 from fearguard import readings
-from fearguard.kalman import kalman_filter, white_noise_q
+from fearguard.sensors.kalman import kalman_filter, white_noise_q
 
 HALF_SPEED_OF_SOUND_MPS = 171.5  # [m/s] 343 m/s at 20 °C, halved: the echo travels there and back (17150 cm/s)
 HC_SR04_MIN_RANGE_M = 0.15  # [m] 6 in (0.1524 m), lower end of the usable range reported for the HC-SR04

@@ -23,12 +23,12 @@ from typing import Any
 
 import numpy as np
 
-from fearguard.policy import Mode
+from fearguard.policy import MODE_ORDER
 from fearguard.readings import finite_reading
 from fearguard.sim.scenario_values import EXPECTATION_NAMES, Expectations
 from fearguard.sim.world import Truth
 
-MODES = ("NORMAL", "CAUTION", "EMERGENCY")
+MODES = MODE_ORDER  # least to most cautious, as policy.Mode declares them
 STOPPED_SPEED_MPS = 0.02  # [m/s] at or below this the car counts as stopped
 SPEED_TOLERANCE_MPS = 1e-6  # [m/s] a speed cap is met up to floating-point rounding
 TIME_TOLERANCE_S = 1e-9  # [s] "by t" / "not before t" compare times up to rounding
@@ -261,7 +261,6 @@ def _stopped_before_obstacle(want: bool, run: RunMetrics, rows: Sequence[Row]) -
                               detail + (f"; {run.collisions} collision(s)" if run.collisions else ""))]
 
 
-MODE_ORDER = tuple(m.name for m in Mode)  # policy.Mode declares its members from least to most cautious
 
 
 def _at_least(field: str, seen: str | None, wanted: str) -> bool:

@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import Any
 
 from fearguard.errors import ScenarioError
+from fearguard.files.reader import Table, number_list, read_toml
 from fearguard.fuzzy.loader import bundled_rules_path
 from fearguard.policy import Mode, Strategy
-from fearguard.reader import Table, number_list, read_toml
 from fearguard.readings import whole_number
 from fearguard.sim.scales import SCALES, scale_defaults
 from fearguard.sim.scenario_values import (

@@ -12,21 +12,22 @@ cannot be judged by.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from fearguard.drive.interrupt import StopSignal
+from fearguard.drive.plan import RunSpec
+from fearguard.drive.suite import PlanResult, run_plan
 from fearguard.errors import ScenarioError
-from fearguard.interrupt import StopSignal
-from fearguard.recorder import SUMMARY_NAME, write_json
-from fearguard.report import JsonlLog, read_jsonl
+from fearguard.outputs.recorder import SUMMARY_NAME, write_json
+from fearguard.outputs.timeline import plot_timeline
 from fearguard.sim.loop import CONTROLLERS, RunResult, run_scenario
 from fearguard.sim.metrics import Row
 from fearguard.sim.road import Road
 from fearguard.sim.scenario import BUNDLED, Scenario, load_scenario
-from fearguard.timeline import plot_timeline
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -48,14 +49,14 @@ def scenario_files(folder: str | Path | None = None) -> list[Path]:
 
 def run_to_folder(
     scenario: Scenario, out: Path, seed: int | None = None, controller: str = "guarded", video: bool = False,
-    on_frame: Callable[[int, int], None] | None = None, stop: StopSignal | None = None,
+    on_frame: Callable[[int, int], None] | None = None, stop: StopSignal | None = None, mcap: bool = False,
 ) -> RunResult:
-    """One run with every file a person looks at; the summary is on disk before the plots are drawn.
+    """One run with every file a person looks at (``mcap``: run.mcap too); the summary is on disk before the plots are drawn.
 
     A stop signal during the plots skips the plots not yet drawn and marks the summary interrupted.
     """
     out.mkdir(parents=True, exist_ok=True)
-    result = run_scenario(scenario, seed, controller, out, video=video, on_frame=on_frame, stop=stop)
+    result = run_scenario(scenario, seed, controller, out, video=video, on_frame=on_frame, stop=stop, mcap=mcap)
     write_json(out / SUMMARY_NAME, result.to_json())
     if result.rows:
         title = f"{scenario.name} ({controller}, seed {result.seed})"
@@ -141,15 +142,7 @@ def _draw_map(ax: Any, scenario: Scenario, road: Road, rows: Sequence[Row], hit:
     ax.set(xlabel="x (m)", ylabel="y (m)", title="top-down")
 
 
-@dataclass(frozen=True)
-class SuiteProgress:
-    """What ``run_suite`` returns: every row (resumed and new), the runs still to do, and whether it was cut short."""
-
-    rows: list[dict[str, Any]]
-    planned: int  # runs in the whole suite
-    resumed: int  # rows read back from an earlier, interrupted suite
-    interrupted: bool = False
-    stopped_by: str | None = None
+SuiteProgress = PlanResult  # what ``run_suite`` returns: every row (resumed and new), the plan's size, cut short or not
 
 
 def suite_row(result: RunResult, route_m: float | None = None) -> dict[str, Any]:
@@ -175,62 +168,40 @@ def suite_row(result: RunResult, route_m: float | None = None) -> dict[str, Any]
     }
 
 
+def plan(files: Iterable[Path], seeds: int, controllers: Sequence[str] = CONTROLLERS) -> list[RunSpec]:
+    """Every scenario × seed × controller, as rows: the seeds are each scenario's own seed and the ones after it."""
+    if not (isinstance(seeds, int) and seeds >= 1):
+        raise ValueError(f"seeds must be a whole number >= 1, got {seeds!r}")
+    specs = []
+    for path in files:
+        scenario = load_scenario(path)
+        specs += [RunSpec("sim", scenario.name, c, scenario.seed + k, {"file": str(path)}) for k in range(seeds) for c in controllers]
+    return specs
+
+
+def run_row(spec: RunSpec, stop: StopSignal | None = None) -> dict[str, Any]:
+    """One run of the simulator's suite, no per-frame files: its row (``"interrupted": true`` if ``stop`` cut it short)."""
+    scenario = load_scenario(spec.options["file"])
+    result = run_scenario(scenario, spec.seed, spec.controller, stop=stop)
+    if result.interrupted:
+        return {"interrupted": True}
+    return suite_row(result, Road(scenario.road).length_m)
+
+
 def run_suite(
     files: Iterable[Path], seeds: int, controllers: Sequence[str] = CONTROLLERS, on_run: Callable[[str], None] | None = None,
     runs_log: Path | None = None, resume: bool = False, stop: StopSignal | None = None,
     on_progress: Callable[[int, int], None] | None = None,
 ) -> SuiteProgress:
-    """Every scenario × seed × controller, no per-frame files; one row per finished run.
+    """Every scenario × seed × controller through the one suite (``drive/suite.py``): a row per finished run, appended to
+    ``runs_log`` as it finishes; ``resume`` skips the runs already there."""
 
-    With ``runs_log`` each finished run is appended to it as a flushed JSON line (so an interrupted
-    suite keeps every finished run); with ``resume`` the runs already in it are skipped. A run cut
-    short by ``stop`` is not a result: it is left out, and the suite stops there. ``on_progress(done, planned)``
-    is called after each run (resumed runs count as done).
-    """
-    if not (isinstance(seeds, int) and seeds >= 1):
-        raise ValueError(f"seeds must be a whole number >= 1, got {seeds!r}")
-    plan = [(path, k, controller) for path in files for k in range(seeds) for controller in controllers]
-    done = _finished_runs(runs_log) if (resume and runs_log is not None) else []
-    keys = {(r["scenario"], r["seed"], r["controller"]) for r in done}
-    rows, resumed = list(done), len(done)
-    log = JsonlLog(runs_log) if runs_log is not None else None  # rewritten: the resumed rows, then each new one
-    scenarios: dict[Path, Scenario] = {}
-    try:
-        for row in done if log is not None else ():
-            log.write(row)
-        for path, k, controller in plan:
-            if stop:
-                break
-            if path not in scenarios:
-                scenarios[path] = load_scenario(path)
-            scenario = scenarios[path]
-            seed = scenario.seed + k
-            if (scenario.name, seed, controller) in keys:
-                continue
-            if on_progress is not None:
-                on_progress(len(rows), len(plan))
-            result = run_scenario(scenario, seed, controller, stop=stop)
-            if result.interrupted:
-                break
-            row = suite_row(result, Road(scenario.road).length_m)
-            rows.append(row)
-            if log is not None:
-                log.write(row)
-            if on_run is not None:
-                on_run(f"{scenario.name} seed {seed} {controller}: {'pass' if result.passed else 'FAIL'}")
-            if on_progress is not None:
-                on_progress(len(rows), len(plan))
-    finally:
-        if log is not None:
-            log.close()
-    return SuiteProgress(rows, len(plan), resumed, bool(stop), stop.name if stop else None)
+    def said(row: dict[str, Any]) -> None:
+        if on_run is not None:
+            on_run(f"{row['scenario']} seed {row['seed']} {row['controller']}: {'pass' if row['passed'] else 'FAIL'}")
 
-
-def _finished_runs(path: Path) -> list[dict[str, Any]]:
-    """The rows of an earlier suite's runs.jsonl (a torn last line from a killed suite is left out)."""
-    if not path.is_file():
-        return []
-    return [r for r in read_jsonl(path) if isinstance(r, dict) and {"scenario", "seed", "controller", "passed"} <= r.keys()]
+    return run_plan(plan(files, seeds, controllers), runs_log=runs_log, resume=resume, stop=stop, on_row=said,
+                    on_progress=on_progress)
 
 
 def suite_table(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:

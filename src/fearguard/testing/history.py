@@ -34,20 +34,12 @@ import numpy as np
 
 import fearguard as fg
 from fearguard.cues import CUE_NAMES
-from fearguard.errors import FearguardError
-from fearguard.reader import loads_json
+from fearguard.errors import HistoryError  # defined in errors.py, importable here
+from fearguard.files.reader import loads_json
 
 FORMAT_VERSION = 1
 OBSERVATION_NUMBERS = ("t_s", "speed_mps", "ultrasonic_range_m", "ultrasonic_echo_s", "odometer_m", "range_rate_mps")
 COMMAND_FIELDS = ("fear", "fear_level", "mode", "strategy", "speed_limit_mps", "steering_deg", "reasons")
-
-
-class HistoryError(FearguardError):
-    """A history file cannot be read: names the file, the line and the field."""
-
-    def __init__(self, path: str | Path, line: int | None, problem: str) -> None:
-        self.path, self.line, self.problem = str(path), line, problem
-        super().__init__(f"{self.path}, line {line}: {problem}" if line else f"{self.path}: {problem}")
 
 
 @dataclass(frozen=True)

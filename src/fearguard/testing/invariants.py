@@ -5,17 +5,13 @@ the subject's rules and vehicle), and ``check(subject, case)``, which runs the c
 supervisors and returns None, or a sentence saying which frame breaks the invariant and by how much.
 ``fearguard.testing.verify`` searches the cases with hypothesis and shrinks a failing one into the
 smallest history that still breaks the invariant.
-
-An invariant whose behaviour is not in fearguard yet is ``pending`` (its reason says what is missing):
-its checker is written against docs/architecture.md's contract and is reported as skipped, not passed.
 """
 
 from __future__ import annotations
 
-import importlib
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -24,12 +20,12 @@ from hypothesis import strategies as st
 import fearguard as fg
 from fearguard.cues import CUE_NAMES, CUE_SPECS, Worsens
 from fearguard.fuzzy.promises import Promise, Response, promises, rule_for
+from fearguard.perception import FROZEN_S
 from fearguard.readings import finite_reading
 from fearguard.testing import strategies as fs
 from fearguard.testing.history import Case, FrameSpec, SteerRaises, Step
-from fearguard.testing.subject import HAS_RANGE_RATE, NOT_CALLED, Driver, Run, Subject, run
+from fearguard.testing.subject import NOT_CALLED, Driver, Run, Subject, run
 
-POLICY_FIELDS = frozenset(f.name for f in fields(fg.PolicyConfig))
 TOL = 1e-9  # [m/s], [-] rounding allowed in comparisons of speeds and fears
 FEAR_TOL = 1e-12  # [-] the vector path sums in another order than the scalar path
 VISION_CUES = ("lane_confidence", "brightness", "occlusion")
@@ -49,7 +45,6 @@ class Invariant:
     design: str
     cases: Callable[[Subject], st.SearchStrategy[Case]]
     check: CheckFn
-    pending: str = ""  # not checkable on this fearguard yet: why (reported as skipped)
     prefix_closed: bool = False  # a violation at frame i is one of every longer drive too: a counterexample can be cut after it
     narrow: Callable[[Subject, Case], Case] | None = None  # after shrinking: the part of a case that shows the failure
 
@@ -155,7 +150,7 @@ def stopping_distance_m(v: float, car: fg.VehicleLimits) -> float:
 
 def lead_speed_mps(step: Step, cmd: fg.Command) -> float:
     """Speed of the object ahead the supervisor assumed: ego speed − its closing speed (≥ 0); unknown: 0 (standing)."""
-    closing, speed = getattr(cmd, "closing_speed_mps", math.nan), finite_reading(step.speed_mps)
+    closing, speed = cmd.closing_speed_mps, finite_reading(step.speed_mps)
     if speed is None or not isinstance(closing, float) or not math.isfinite(closing):
         return 0.0
     return max(0.0, speed - closing)
@@ -170,7 +165,7 @@ def check_safe_distance(subject: Subject, case: Case) -> str | None:
     sensor's maximum range: the car must be able to stop within what it can see.
     """
     car = subject.vehicle
-    b = getattr(car, "lead_max_decel_mps2", None)
+    b = car.lead_max_decel_mps2
 
     def judge(step: Step, cmd: fg.Command) -> str | None:
         d, seen, v_f = _used_range_m(cmd), "obstacle at", lead_speed_mps(step, cmd) if b else 0.0
@@ -367,7 +362,7 @@ def _monotone_cases(subject: Subject) -> st.SearchStrategy[Case]:
         runs = (("better", (*prefix, replace(tail, range_rate_mps=rate))), ("worse", (*prefix, replace(tail, range_rate_mps=rate - more))))
         return Case(runs, note="the obstacle closes faster on the last frame", params=params)
 
-    return st.one_of(pair(), pair(), closing()) if HAS_RANGE_RATE else pair()
+    return st.one_of(pair(), pair(), closing())
 
 
 def _num(v: float) -> float | str:
@@ -527,7 +522,7 @@ def check_rate_limits(subject: Subject, case: Case) -> str | None:
                 if cmd.speed_limit_mps > allowed + TOL:
                     return (f"frame {i}: the speed limit rises {prev_limit:.4g} → {cmd.speed_limit_mps:.4g} m/s in {t - ref[0]:.4g} s, "
                             f"faster than the comfort acceleration {cfg.comfort_accel_mps2:g} m/s²")
-            cap = min(getattr(cmd, "fear_limit_mps", math.inf), getattr(cmd, "envelope_mps", math.inf))
+            cap = min(cmd.fear_limit_mps, cmd.envelope_mps)
             if not math.isnan(cap) and cmd.speed_limit_mps > cap + FEAR_TOL:
                 return f"frame {i}: the speed limit {cmd.speed_limit_mps:.4g} m/s is above what fear and the envelope allow ({cap:.4g} m/s)"
             if t is not None:
@@ -548,7 +543,7 @@ def check_pass_through(subject: Subject, case: Case) -> str | None:
     r = run(subject, history)
     if r.raised:
         return _broken(r)
-    rate = getattr(subject.vehicle, "max_steering_rate_dps", None)
+    rate = subject.vehicle.max_steering_rate_dps
     last_t: float | None = None
     for i, (step, cmd, raw) in enumerate(zip(history, r.commands, r.steering_in, strict=True)):
         t = _t(step)
@@ -623,7 +618,6 @@ def check_deterministic(subject: Subject, case: Case) -> str | None:
 
 # -- 9. liveness of the recovery ------------------------------------------------------------------
 RECOVERY_WAIT_S = 30.0  # [s] standing still in a road-picture emergency: the creep must have come by then
-RECOVERY_KEYS = ("recovery_dwell_s", "recovery_creep_s", "recovery_max_creeps")  # [policy] numbers of the recovery (issue 10)
 
 
 def check_recovery_is_live(subject: Subject, case: Case) -> str | None:
@@ -643,13 +637,13 @@ def check_recovery_is_live(subject: Subject, case: Case) -> str | None:
         return f"frame {creeps[0]}: a creep ({_cmd_text(r.commands[creeps[0]])}) although {case.note}"
     cfg = subject.rules.policy
     episodes = _runs_of(creeps)
-    most, longest_s = getattr(cfg, "recovery_max_creeps", None), getattr(cfg, "recovery_creep_s", None)
-    if most is not None and len(episodes) > most:
+    most, longest_s = cfg.recovery_max_creeps, cfg.recovery_creep_s
+    if len(episodes) > most:
         return f"{len(episodes)} creeps in one EMERGENCY, more than recovery_max_creeps = {most}"
     dt = float(case.params.get("dt", 0.0))
     for a, b in episodes:
         lasted = float(history[b].t_s) - float(history[a].t_s)
-        if longest_s is not None and lasted > longest_s + dt + TOL:
+        if lasted > longest_s + dt + TOL:
             return f"frames {a}-{b}: a creep of {lasted:.4g} s, longer than recovery_creep_s = {longest_s:g} s"
     return None
 
@@ -720,7 +714,6 @@ def _watchdog_cases(subject: Subject) -> st.SearchStrategy[Case]:
     return _drives(subject, max_size=25)
 
 
-WATCHDOG_KEYS = ("watchdog_frames", "watchdog_age_s")  # [policy] numbers of the stall watchdog (issue 10)
 
 
 def check_stall(subject: Subject, case: Case) -> str | None:
@@ -728,9 +721,7 @@ def check_stall(subject: Subject, case: Case) -> str | None:
     fault for that frame: EMERGENCY/STOP with a zero limit. Checked where it must hold whatever period the
     supervisor measured: a gap longer than watchdog_age_s and watchdog_frames × every earlier gap."""
     cfg = subject.rules.policy
-    frames_n, age_s = (getattr(cfg, k, None) for k in WATCHDOG_KEYS)
-    if frames_n is None or age_s is None:
-        frames_n, age_s = 10, 1.0  # docs/architecture.md / openpilot: a message older than max(10 periods, 1 s)
+    frames_n, age_s = cfg.watchdog_frames, cfg.watchdog_age_s
     for _, history in case.runs:
         r = run(subject, history)
         if r.raised:
@@ -807,16 +798,13 @@ def _refill_cases(subject: Subject) -> st.SearchStrategy[Case]:
     return refilled()
 
 
-# one owner for the frame pipeline, no identity cache (issue 9); its mark is the Command carrying its perception
-HAS_PIPELINE_OWNER = any(f.name == "perceived" for f in fields(fg.Command))
-HAS_FROZEN_S = hasattr(importlib.import_module("fearguard.perception"), "FROZEN_S")  # frozen judged in seconds (issue 10)
 
 
 def check_repeated_frames(subject: Subject, case: Case) -> str | None:
     """The same frame content again within a short window (a loop faster than its camera) is "no new frame":
     no "frozen" reason and the same picture cues as when it was new; content identical for longer than the
     frozen threshold (perception.FROZEN_S) is a frozen camera: its picture cues are unknown."""
-    frozen_s = getattr(importlib.import_module("fearguard.perception"), "FROZEN_S", math.inf)
+    frozen_s = FROZEN_S
     history = case.run("drive")
     r = run(subject, history)
     if r.raised:
@@ -950,7 +938,7 @@ INVARIANTS: tuple[Invariant, ...] = (
               lambda s: _drives(s), check_limits_in_range, prefix_closed=True),
     Invariant("2", "safe_distance", "safe distance", "v·t_r + v²/(2·a) ≤ max(0, d − margin) for v = the speed limit",
               _safe_distance_cases, check_safe_distance, prefix_closed=True),
-    Invariant("3", "monotone", "monotone in each cue" + (" and closing speed" if HAS_RANGE_RATE else ""),
+    Invariant("3", "monotone", "monotone in each cue and closing speed",
               "a cue getting worse never lowers fear nor raises the speed limit; a faster closing speed never raises it",
               _monotone_cases, check_monotone, narrow=_monotone_at_drop),
     Invariant("4", "unknown_is_worst", "unknown = worst",
@@ -966,22 +954,16 @@ INVARIANTS: tuple[Invariant, ...] = (
               prefix_closed=True),
     Invariant("9", "recovery_is_live", "liveness of the recovery",
               "a road-picture emergency (range clear, no fault) is followed by a bounded creep, not a stop for good",
-              _recovery_cases, check_recovery_is_live,
-              pending="" if all(k in POLICY_FIELDS for k in RECOVERY_KEYS) else
-              "the recovery creep (issue 10) is not in this fearguard: a road-picture stop is forever"),
+              _recovery_cases, check_recovery_is_live),
     Invariant("10", "watchdog", "stale input is a fault", "time not increasing, a failed steering function: EMERGENCY/STOP at once",
               _watchdog_cases, check_watchdog, prefix_closed=True),
     Invariant("10", "stall", "a stall is a fault", "a frame later than the watchdog allows gives EMERGENCY/STOP",
-              _stall_cases, check_stall, prefix_closed=True,
-              pending="" if all(k in POLICY_FIELDS for k in WATCHDOG_KEYS) else
-              "the timing watchdog (issue 10) is not in this fearguard: a frame 2 s late is answered as usual"),
+              _stall_cases, check_stall, prefix_closed=True),
     Invariant("10", "refilled_buffer", "a refilled buffer is a new frame", "one buffer refilled with new pixels is analysed afresh",
-              _refill_cases, check_refilled_buffer, prefix_closed=True, pending="" if HAS_PIPELINE_OWNER else
-              "the frame pipeline's identity cache (issue 9) is still here: a refilled buffer repeats the first frame's cues"),
+              _refill_cases, check_refilled_buffer, prefix_closed=True),
     Invariant("10", "repeated_frames", "a repeated frame is no new frame",
               "a repeated frame within a short window is 'no new frame', not a frozen camera", _repeat_cases, check_repeated_frames,
-              prefix_closed=True, pending="" if HAS_FROZEN_S else
-              "repeats are judged in frames, not seconds (issue 10): a 20 Hz loop on a 5 fps camera reads as a frozen camera"),
+              prefix_closed=True),
     Invariant("11", "reachable", "each hazard alone reaches its response",
               "a cue alone at its worst (the others calm) reaches the mode and strategy the design promises", _reachable_cases,
               check_reachable, narrow=_first_broken_promise),

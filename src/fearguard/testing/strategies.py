@@ -21,14 +21,12 @@ import numpy as np
 from hypothesis import strategies as st
 
 import fearguard as fg
-from fearguard.cues import CUE_NAMES, CUE_SPECS
+from fearguard.cues import CUE_NAMES, CUE_SPECS, calm_values
 from fearguard.testing.frames import EFFECTS, GARBAGE, RENDER_POOL, RENDER_SCENARIOS
 from fearguard.testing.history import FrameSpec, SteerRaises, Step
 
 SearchStrategy = st.SearchStrategy
-DEFAULT_SPAN = {"obstacle_range_m": 10.0, "qr_staleness_s": 40.0}  # [m], [s] when a rule base has no such variable
 CALM_GRID = 201  # [points] per cue when looking for the values where fear is VERY_LOW
-TRUE_BEST = {"lane_confidence": 1.0, "occlusion": 0.0, "obstacle_range_m": math.inf, "qr_staleness_s": 0.0}
 
 
 def _rules(rules: fg.RuleBase | None) -> fg.RuleBase:
@@ -50,7 +48,7 @@ def cue_span(name: str, rules: fg.RuleBase | None = None, vehicle: fg.VehicleLim
     if math.isfinite(spec.high):
         return spec.low, spec.high
     var = _rules(rules).variables.get(name)
-    hi = float(var.universe[-1]) if var is not None else DEFAULT_SPAN[name]
+    hi = float(var.universe[-1]) if var is not None else spec.span
     if name == "obstacle_range_m":
         hi = max(hi, _vehicle(vehicle).ultrasonic_max_range_m)
     return spec.low, 1.25 * hi
@@ -138,8 +136,7 @@ def calm_ranges(rules: fg.RuleBase) -> dict[str, tuple[float, float]]:
 @lru_cache(maxsize=16)
 def best_cues(rules: fg.RuleBase) -> fg.Cues:
     """The calmest picture: each cue at its best (brightness mid band; open ends at inf / 0)."""
-    lo, hi = rules.brightness_band
-    return fg.Cues(brightness=(lo + hi) / 2.0, **TRUE_BEST)
+    return fg.Cues(*calm_values(rules.brightness_band))
 
 
 def calm_cues(rules: fg.RuleBase | None = None, vehicle: fg.VehicleLimits | None = None) -> SearchStrategy[fg.Cues]:

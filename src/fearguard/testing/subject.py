@@ -16,16 +16,12 @@ from pathlib import Path
 from typing import Any
 
 import fearguard as fg
-from fearguard.errors import FearguardError
-from fearguard.steer_import import resolve_steer
+from fearguard.errors import SetupError  # defined in errors.py, importable here
+from fearguard.files.steer_import import resolve_steer
 from fearguard.testing.frames import frame_pixels
 from fearguard.testing.history import History, SteerRaises, Step
 from fearguard.vehicle import resolve_vehicle as vehicle_by_name
 from fearguard.vehicle import vehicle_from_table
-
-
-class SetupError(FearguardError):
-    """A vehicle file, preset or steering function given to the kit cannot be used."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -130,16 +126,13 @@ class Run:
     raised: str | None = None  # step() raised: the supervisor broke its contract
 
 
-OBSERVATION_FIELDS = frozenset(f.name for f in fields(fg.Observation))
-HAS_RANGE_RATE = "range_rate_mps" in OBSERVATION_FIELDS  # a caller-known closing speed (radar, simulator)
-
-
-def observation(step: Step, frame: Any) -> fg.Observation:
-    """The Observation a step describes (a range rate only where this fearguard's Observation has the field)."""
-    extra = {"range_rate_mps": step.range_rate_mps} if HAS_RANGE_RATE and step.range_rate_mps is not None else {}
+def observation(step: Step, frame: Any, scripted: bool = False) -> fg.Observation:
+    """The Observation a step describes; ``scripted``: the step's steering output comes with it (``steering_deg``), as a
+    caller that holds the estimator's angle passes it (a scripted raise is a value that is no angle: a fault too)."""
     return fg.Observation(
         t_s=step.t_s, speed_mps=step.speed_mps, frame=frame, cues=step.cues, ultrasonic_range_m=step.ultrasonic_range_m,
-        odometer_m=step.odometer_m, qr_payload=step.qr_payload, lead=step.lead, ultrasonic_echo_s=step.ultrasonic_echo_s, **extra,
+        odometer_m=step.odometer_m, qr_payload=step.qr_payload, lead=step.lead, ultrasonic_echo_s=step.ultrasonic_echo_s,
+        range_rate_mps=step.range_rate_mps, steering_deg=step.steer_output if scripted else None,
     )
 
 
@@ -152,9 +145,8 @@ class Driver:
 
     def __init__(self, subject: Subject) -> None:
         self.subject = subject
-        self._step: Step | None = None
         self._answers: list[Any] = []
-        self.guard = fg.FearGuard(self._steer, rules=subject.rules, vehicle=subject.vehicle)
+        self.guard = fg.FearGuard(self._steer if subject.steer is not None else None, rules=subject.rules, vehicle=subject.vehicle)
         self._reset_steer()
 
     def _reset_steer(self) -> None:
@@ -167,12 +159,8 @@ class Driver:
         self._reset_steer()
 
     def _steer(self, frame: Any) -> Any:
-        if self.subject.steer is None:
-            out = self._step.steer_output if self._step is not None else 0.0
-            self._answers[-1] = out
-            if isinstance(out, SteerRaises):
-                raise _exception(out.exception)
-            return out
+        """The subject's own steering function, its answer (or that it raised) recorded for the checkers."""
+        assert self.subject.steer is not None  # only wrapped when there is one (a scripted answer comes in the Observation)
         try:
             out = self.subject.steer(frame)
         except Exception as exc:  # recorded for the checkers, then handed on: the supervisor must catch it
@@ -186,13 +174,13 @@ class Driver:
         commands: list[fg.Command] = []
         self._answers = []
         previous: Any = None
+        scripted = self.subject.steer is None
         for i, step in enumerate(history):
-            self._step = step
-            self._answers.append(NOT_CALLED)
+            self._answers.append(step.steer_output if scripted else NOT_CALLED)
             frame = frame_pixels(step.frame, previous)
             previous = frame
             try:
-                commands.append(self.guard.step(observation(step, frame)))
+                commands.append(self.guard.step(observation(step, frame, scripted)))
             except Exception as exc:  # the contract says step never raises: report it as the violation
                 return Run(tuple(commands), tuple(self._answers), f"step {i} raised {type(exc).__name__}: {exc}")
         return Run(tuple(commands), tuple(self._answers))
@@ -202,8 +190,3 @@ def run(subject: Subject, history: History) -> Run:
     """Feed a history to a fresh supervisor; never raises for what the supervisor does."""
     return Driver(subject).drive(history)
 
-
-def _exception(name: str) -> Exception:
-    kind = {"RuntimeError": RuntimeError, "ValueError": ValueError, "ZeroDivisionError": ZeroDivisionError,
-            "TypeError": TypeError, "MemoryError": MemoryError}.get(name, RuntimeError)
-    return kind("scripted steering fault")

@@ -9,6 +9,7 @@ the same subject, examples and seed try the same cases (``random.Random(seed)``,
 from __future__ import annotations
 
 import random
+import sys
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -86,16 +87,13 @@ class Outcome:
     invariant: Invariant
     examples: int  # cases tried before the first failure (all of them when it passed)
     counterexample: Counterexample | None = None
-    skipped: str = ""
 
     @property
     def passed(self) -> bool:
-        return self.counterexample is None and not self.skipped
+        return self.counterexample is None
 
     @property
     def result(self) -> str:
-        if self.skipped:
-            return f"skipped: {self.skipped}"
         return "ok" if self.counterexample is None else f"FAILED: {self.counterexample.message}"
 
 
@@ -107,16 +105,17 @@ def search_settings(examples: int, shrink: bool = True) -> settings:
 
 
 def find_counterexample(inv: Invariant | str, subject: Subject, examples: int = DEFAULT_EXAMPLES, seed: int = 0,
-                        include_pending: bool = False, shrink: bool = True) -> Outcome:
-    """Search one invariant; the shrunk counterexample if any case breaks it (``shrink=False``: the first found)."""
+                        shrink: bool = True, on_example: Callable[[int], None] | None = None) -> Outcome:
+    """Search one invariant; the shrunk counterexample if any case breaks it (``shrink=False``: the first found).
+    ``on_example(n)`` after each case checked (progress)."""
     inv = invariant(inv) if isinstance(inv, str) else inv
-    if inv.pending and not include_pending:
-        return Outcome(inv, 0, skipped=inv.pending)
     tried = [0, 0]  # cases checked, cases checked before the first failure
 
     def breaks(case: Case) -> bool:
         tried[0] += 1
         bad = inv.check(subject, case) is not None
+        if on_example is not None:
+            on_example(tried[0])
         if bad and not tried[1]:
             tried[1] = tried[0]
         return bad
@@ -154,11 +153,14 @@ def _cut(inv: Invariant, subject: Subject, case: Case) -> Case:
 
 
 def verify(subject: Subject, examples: int = DEFAULT_EXAMPLES, seed: int = 0, only: Sequence[str] = (),
-           on_outcome: Callable[[Outcome], None] | None = None) -> list[Outcome]:
-    """Search every invariant (or those in ``only``), in docs/architecture.md's order."""
+           on_outcome: Callable[[Outcome], None] | None = None,
+           on_example: Callable[[Invariant, int], None] | None = None) -> list[Outcome]:
+    """Search every invariant (or those in ``only``), in docs/architecture.md's order; ``on_example(invariant, n)`` after
+    each case checked."""
     outcomes = []
     for inv in chosen(only):
-        outcome = find_counterexample(inv, subject, examples, seed)
+        each = None if on_example is None else (lambda n, inv=inv: on_example(inv, n))
+        outcome = find_counterexample(inv, subject, examples, seed, on_example=each)
         outcomes.append(outcome)
         if on_outcome is not None:
             on_outcome(outcome)
@@ -188,8 +190,7 @@ def table_header() -> str:
 
 
 def table_row(o: Outcome) -> str:
-    examples = str(o.examples) if not o.skipped else "-"
-    return f"{o.invariant.number:>2}  {o.invariant.title:<{TITLE_WIDTH}}  {examples:>8}  {o.result}"
+    return f"{o.invariant.number:>2}  {o.invariant.title:<{TITLE_WIDTH}}  {o.examples:>8}  {o.result}"
 
 
 def table(outcomes: Sequence[Outcome]) -> str:
@@ -223,7 +224,7 @@ def supervisor_invariants(rules: fg.RuleBase | str | Path | None = None, vehicle
 
     ``examples`` (cases per invariant) defaults to the active hypothesis profile's ``max_examples``. A failure
     shows the shrunk history and writes it to ``counterexamples/<invariant>.jsonl`` (replay it with
-    ``fearguard verify --replay FILE``). Pending invariants are skipped with their reason.
+    ``fearguard verify --replay FILE``).
     """
     import pytest
 
@@ -236,8 +237,6 @@ def supervisor_invariants(rules: fg.RuleBase | str | Path | None = None, vehicle
             state["subject"] = Subject.of(rules, vehicle, steer)
         n = examples if examples is not None else settings.default.max_examples
         outcome = find_counterexample(invariant_key, state["subject"], n, seed)
-        if outcome.skipped:
-            pytest.skip(outcome.skipped)
         if outcome.counterexample is not None:
             path = outcome.counterexample.save(Path(counterexamples) / f"{invariant_key}.jsonl")
             pytest.fail(f"{outcome.counterexample.text()}\n(saved to {path}; replay: fearguard verify --replay {path})", pytrace=False)
@@ -246,7 +245,8 @@ def supervisor_invariants(rules: fg.RuleBase | str | Path | None = None, vehicle
 
 
 def verify_command(rules: str | None, vehicle: str | None, steer: str | None, examples: int, seed: int, out: str | Path,
-                   only: Sequence[str] = (), replay: str | None = None, echo: Callable[[str], None] = _echo) -> int:
+                   only: Sequence[str] = (), replay: str | None = None, echo: Callable[[str], None] = _echo,
+                   progress: Callable[[str], None] = lambda line: print(line, file=sys.stderr, flush=True)) -> int:
     """``fearguard verify``: the table, a shrunk counterexample file per failure; 0 all hold, 1 one fails.
 
     With ``replay``: re-run a saved counterexample; 1 if it still breaks its invariant, 0 if not.
@@ -261,7 +261,13 @@ def verify_command(rules: str | None, vehicle: str | None, steer: str | None, ex
     echo(f"fearguard verify: rules {subject.rules.path} ({subject.rules.name!r}), vehicle {subject.vehicle_name}, "
          f"steer {subject.steer_name}, up to {examples} examples per invariant, seed {seed}")
     echo(table_header())
-    outcomes = verify(subject, examples, seed, only, on_outcome=lambda o: echo(table_row(o)))  # a row as each finishes
+    quarter = max(1, examples // 4)
+
+    def examples_done(inv: Invariant, n: int) -> None:  # the search of one invariant can take a minute: say how far it is
+        if n % quarter == 0 and n < examples:
+            progress(f"verify: invariant {inv.number} ({inv.title}): {n}/{examples} examples")
+
+    outcomes = verify(subject, examples, seed, only, on_outcome=lambda o: echo(table_row(o)), on_example=examples_done)
     failed = [o for o in outcomes if o.counterexample is not None]
     for o in failed:
         assert o.counterexample is not None
@@ -269,7 +275,5 @@ def verify_command(rules: str | None, vehicle: str | None, steer: str | None, ex
         echo("")
         echo(o.counterexample.text())
         echo(f"counterexample written to {path} (replay: fearguard verify --replay {path})")
-    skipped = sum(1 for o in outcomes if o.skipped)
-    held = len(outcomes) - len(failed) - skipped
-    echo(f"{held} held, {len(failed)} failed, {skipped} skipped")
+    echo(f"{len(outcomes) - len(failed)} held, {len(failed)} failed")
     return 1 if failed else 0

@@ -29,7 +29,7 @@ from fearguard.observation import Lead, LeadBox
 from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
 from fearguard.vision.exposure import Exposure, road_exposure
 from fearguard.vision.ground_lanes import GroundLanes, GroundLaneSpec, aim_point, ground_lanes_in_image
-from fearguard.vision.lanes import LaneLine, RoadRegion, detect_lanes, region_mask, road_region, work_size
+from fearguard.vision.lanes import LaneLine, RoadRegion, assumed_horizon_v_px, detect_lanes, region_mask, road_region, work_size
 from fearguard.vision.lead import detect_lead, lead_from_box
 from fearguard.vision.obstacle import Obstacle, detect_obstacle
 from fearguard.vision.occlusion import default_lines, occlusion, road_appearance, road_reference, surface_maps
@@ -67,6 +67,8 @@ class FrameAnalysis:
     obstacle: Obstacle | None = None  # anything standing in the ego lane, with its ground-plane range (vision/obstacle.py)
     ground: GroundLanes | None = None  # the bending lane in the ground plane, when the pipeline fits one (vision/ground_lanes.py)
     curves_px: tuple[np.ndarray | None, np.ndarray | None] | None = None  # its boundaries as polylines (u, v), frame pixels
+    t_s: float = _NAN  # [s] when the frame was taken (what a steering that depends on time, e.g. a fault injector, reads)
+    horizon_v_px: float | None = None  # [px] frame row of the horizon the road region assumes (lanes.assumed_horizon_v_px)
 
 
 def invalid_frame_reason(frame: object) -> str | None:
@@ -331,6 +333,8 @@ def _analyze(
         right=lanes.right, region=p.region, scale=p.scale, lead_box=seen.box, road_reference=seen.road_reference,
         reasons=reasons, timings_ms=timings, obstacle=seen.obstacle, ground=lanes.ground,
         curves_px=None if lanes.curves_px is None else tuple(c * p.scale if c is not None else None for c in lanes.curves_px),
+        t_s=t_s,
+        horizon_v_px=assumed_horizon_v_px(p.bgr.shape[1], p.bgr.shape[0], p.camera),
     )
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 from fearguard.camera import CameraModel
-from fearguard.lane_check import GroundLine, LaneGeometry
+from fearguard.lane import GroundLine, LaneGeometry
 from fearguard.vision.lanes import LaneLine, RoadRegion
 
 

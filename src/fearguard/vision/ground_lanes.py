@@ -28,9 +28,9 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.medians import median
 from fearguard.vision.lane_tracker import LOST_AFTER_S
 from fearguard.vision.lanes import RIDGE_MIN, YELLOW_SAT_MIN, LaneLine, RoadRegion, smoothed_light
+from fearguard.vision.medians import median
 from fearguard.vision.obstacle import INSET
 from fearguard.vision.occlusion import ROW_STEP
 from fearguard.vision.paint_light import balanced_hls, blue_chroma, is_neutral, measure_light

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fearguard.kalman import kalman_filter
+from fearguard.sensors.kalman import kalman_filter
 from fearguard.vision.lanes import LaneLine, RoadRegion
 
 if TYPE_CHECKING:

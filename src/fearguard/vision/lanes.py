@@ -145,6 +145,14 @@ def work_size(width_px: int, height_px: int) -> tuple[int, int]:
     return WORK_WIDTH_PX, max(1, round(height_px * WORK_WIDTH_PX / width_px))
 
 
+def assumed_horizon_v_px(width_px: int, height_px: int, camera: CameraModel | None = None) -> float:
+    """Image row where the road region assumes the horizon: the pitched camera model's, else the dash-cam default
+    (``road_region`` starts HORIZON_MARGIN of the height below it)."""
+    if camera is not None and camera.pitch_deg != 0.0:
+        return camera.scaled_to(width_px, height_px).horizon_v_px()
+    return (TOP_FRACTION - HORIZON_MARGIN) * height_px
+
+
 def road_region(width_px: int, height_px: int, camera: CameraModel | None = None) -> RoadRegion:
     """Road region of a working image: below the horizon (camera model) or a dash-cam default."""
     top = TOP_FRACTION * height_px

@@ -18,8 +18,8 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.kalman import kalman_filter
 from fearguard.observation import Lead, LeadBox  # plain values (LeadBox re-exported here for existing imports)
+from fearguard.sensors.kalman import kalman_filter
 from fearguard.vision.lanes import LaneLine, RoadRegion
 
 if TYPE_CHECKING:

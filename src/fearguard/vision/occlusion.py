@@ -23,8 +23,8 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from fearguard.medians import median
 from fearguard.vision.lanes import LaneLine, RoadRegion, default_lines  # noqa: F401  (default_lines: re-exported)
+from fearguard.vision.medians import median
 from fearguard.vision.ridges import clamp
 
 ROW_STEP = 2  # [px] sample every this many rows of the working image

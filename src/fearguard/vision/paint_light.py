@@ -35,7 +35,7 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-from fearguard.medians import median
+from fearguard.vision.medians import median
 
 MIN_PIXELS = 50  # [-] fewer bright ridge pixels than this (of every 4th pixel): no estimate (nothing painted in view)
 SPLIT_MIN = 0.6  # [log-chroma] the two paints' classes must be this far apart (Duckietown's: 0.9-1.4; one paint: < 0.5)

@@ -16,12 +16,12 @@ from typing import Protocol
 
 import numpy as np
 
-from fearguard.medians import median
 from fearguard.observation import LeadBox
 from fearguard.vision.ground_lanes import GroundLanes, GroundMemory
 from fearguard.vision.lane_tracker import LaneTracker, TrackedLanes
 from fearguard.vision.lanes import LaneLine, RoadRegion
 from fearguard.vision.lead import LeadTracker
+from fearguard.vision.medians import median
 from fearguard.vision.obstacle import Obstacle, ObstacleTrack
 from fearguard.vision.occlusion import RoadAppearance, RoadModel
 from fearguard.vision.steering import DEFAULT_LANE_WIDTH, LaneMemory

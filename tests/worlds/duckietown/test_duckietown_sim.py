@@ -14,6 +14,8 @@ import pytest
 
 pytest.importorskip("gym_duckietown", reason="the Duckietown simulator is not installed (bash .ci/duckietown.sh)")
 
+import itertools
+
 from fearguard.vision.frame import FramePipeline
 from fearguard.worlds.duckietown import DriveOptions, drive
 from fearguard.worlds.duckietown.drive import EXPERT_LOOKAHEAD_M
@@ -57,6 +59,23 @@ def test_lane_offset_is_positive_to_the_right() -> None:
         w.close()
 
 
+def test_guarded_drive_writes_run_mcap_for_foxglove(tmp_path: Path) -> None:
+    """``--mcap`` (issue 37): the annotated image, the command, the cues and the reasons, one message per step, stamped
+    with the simulator's clock, read back with the mcap package's reader."""
+    from mcap.reader import make_reader
+
+    result = drive(DriveOptions("straight_road", seconds=1, width_px=160, height_px=120, plots=False, mcap=True), tmp_path)
+    assert result.summary["mcap"]["frames"] == 30
+    stamps: dict[str, list[int]] = {}
+    with (tmp_path / "run.mcap").open("rb") as fh:
+        for schema, channel, message in make_reader(fh).iter_messages(log_time_order=False):
+            stamps.setdefault(f"{channel.topic} {schema.name}", []).append(message.log_time)
+    assert set(stamps) == {"/fearguard/image foxglove.CompressedImage", "/fearguard/command fearguard.Command",
+                           "/fearguard/cues fearguard.Cues", "/fearguard/reasons foxglove.Log"}
+    for times in stamps.values():
+        assert len(times) == 30 and all(a < b for a, b in itertools.pairwise(times))
+
+
 def test_expert_keeps_the_lane(tmp_path: Path) -> None:
     s = drive(DriveOptions("straight_road", seconds=3, controller="expert", width_px=160, height_px=120, plots=False), tmp_path).summary
     assert s["departures"] == 0 and s["lane_offset_max_m"] < 0.01
@@ -78,7 +97,7 @@ def test_guarded_drive_writes_the_recorder_files(tmp_path: Path) -> None:
     assert {"lane_confidence", "fear", "mode", "strategy", "lane_offset_m", "progress_m", "vel", "omega"} <= set(first)
     assert json.loads((tmp_path / "summary.json").read_text())["controller"] == "guarded"
     assert (tmp_path / "timeline.png").stat().st_size > 0 and (tmp_path / "drive.png").stat().st_size > 0
-    (video,) = tmp_path.glob("annotated.*")  # .mp4 (H.264) with PyAV, else .avi (MJPG): see fearguard.video
+    (video,) = tmp_path.glob("annotated.*")  # .mp4 (H.264) with PyAV, else .avi (MJPG): see fearguard.outputs.video
     assert video.stat().st_size > 0
     assert s["timing"]["controller_ms_median"] > 0 and not s["invalid_pose"]
 

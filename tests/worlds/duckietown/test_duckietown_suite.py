@@ -2,18 +2,28 @@
 
 from __future__ import annotations
 
+from fearguard.drive.plan import RunSpec
 from fearguard.worlds.duckietown.report import suite_markdown
-from fearguard.worlds.duckietown.suite import LANE_MAPS, criteria, plan
+from fearguard.worlds.duckietown.suite import LANE_MAPS, criteria, merge, options_of, plan
 
 
 def test_plan_has_experts_before_the_runs_compared_to_them() -> None:
-    runs = plan(60.0, 2, rand_seconds=30.0)
+    specs = plan(60.0, 2, rand_seconds=30.0)
+    runs = [(s.name, options_of(s)) for s in specs]
     names = [n for n, _ in runs]
     for m in LANE_MAPS:
         assert names.index(m) == next(i for i, (n, o) in enumerate(runs) if n == m and o.controller == "expert")
     rand = [o for _, o in runs if o.domain_rand]
     assert len(rand) == 4 and {o.seconds for o in rand} == {30.0} and {o.seed for o in rand} == {0, 1}
     assert any(o.obstacle == "duck" and o.range_sensor == "none" and o.controller == "guarded" for _, o in runs)
+    assert len({s.key for s in specs}) == len(specs)  # every row named uniquely: resume finds each
+    assert all(RunSpec.from_json(s.to_json()) == s for s in specs)  # a row survives JSON (runs.jsonl, another process)
+
+
+def test_merge_compares_each_drive_with_the_experts_on_the_same_run() -> None:
+    rows = [_row("loop_empty", "expert", None, progress_m=12.0), _row("loop_empty", "guarded", None, progress_m=11.4)]
+    merged, checks, markdown = merge(rows)
+    assert merged[1]["progress_vs_expert_pct"] == 95.0 and checks[0]["ok"] and "PASS loop_empty" in markdown
 
 
 def _row(run: str, controller: str, pct: float | None, **kw: object) -> dict:

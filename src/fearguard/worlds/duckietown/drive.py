@@ -24,10 +24,12 @@ from typing import Any
 
 import numpy as np
 
+from fearguard.drive.controllers import Guarded, Unguarded
+from fearguard.drive.loop import run
+from fearguard.drive.world import Controller, Decision, Outcome, Sensed
 from fearguard.fuzzy.loader import bundled_rules_path, load_rules
-from fearguard.recorder import Recorder
-from fearguard.report import json_value, read_jsonl
-from fearguard.sim.loop import _unsupervised_steering
+from fearguard.outputs.recorder import Recorder
+from fearguard.outputs.report import json_value
 from fearguard.supervisor import Command, FearGuard, Observation
 from fearguard.vision.lane_steering import HoughLaneSteering
 from fearguard.worlds.duckietown.metrics import STOPPED_SPEED_MPS, Sample, route_completion, summarize_drive
@@ -68,6 +70,7 @@ class DriveOptions:
     start_tile: tuple[int, int] | None = None
     video: bool = False
     plots: bool = True
+    mcap: bool = False  # run.mcap for Foxglove (outputs/mcap.py)
 
     def __post_init__(self) -> None:
         if self.controller not in CONTROLLERS:
@@ -90,6 +93,82 @@ class DriveResult:
     video_path: Path | None = None  # the annotated video as written (annotated.mp4, or annotated.avi without PyAV)
 
 
+class DuckietownDrive:
+    """gym-duckietown as a ``World``: the robot's camera frame (and a time-of-flight reading) in, an action out — the
+    pure-pursuit arc to the commanded steering at the commanded speed, or the expert's own — the simulator's truth of
+    every step kept for the metrics and the drive plot. An obstacle is taken away once the robot has stood still
+    ``remove_after_s`` in front of it."""
+
+    def __init__(self, options: DriveOptions, world: DuckietownWorld, aim_m: float) -> None:
+        self.o, self.world, self.aim_m = options, world, aim_m
+        self.fps = FRAME_RATE_HZ
+        self.total = math.ceil(options.seconds * FRAME_RATE_HZ)
+        self.truth: Truth = world.truth()
+        self.samples: list[Sample] = []
+        self.path: list[dict[str, Any]] = []  # what drive.png draws, kept as it goes (no world reads its log back)
+        self.sim_ms: list[float] = []
+        self._k = 0
+        self._standing_since: float | None = None
+
+    def sense(self) -> Sensed | None:
+        if self._k >= self.total:
+            return None
+        o = self.o
+        frame = self.world.frame_bgr() if o.controller != "expert" else None
+        tof = self.world.tof_range_m() if o.range_sensor == "tof" else None
+        obs = Observation(t_s=self.truth.t_s, speed_mps=self.truth.speed_mps, frame=frame, ultrasonic_range_m=tof)
+        return Sensed(self._k, self.truth.t_s, obs, frame)
+
+    def act(self, sensed: Sensed, decision: Decision) -> Outcome:
+        action = decision.action if decision.action is not None else steering_action(decision.steering_deg, decision.speed_mps, self.aim_m)
+        present = self.world.has_obstacle
+        began = time.perf_counter()
+        truth = self.truth = self.world.step(action)
+        self.sim_ms.append(1e3 * (time.perf_counter() - began))
+        cmd = decision.command
+        self.samples.append(Sample(truth.t_s, truth.speed_mps, truth.lane_offset_m, truth.progress_m, truth.invalid_pose,
+                                   truth.collided, truth.obstacle_gap_m, present, cmd.mode.name if cmd else None,
+                                   cmd.strategy.name if cmd else None, cmd.fear if cmd else None, _cause(cmd)))
+        fields = dict(
+            controller=self.o.controller, speed_target_mps=decision.speed_mps, applied_steering_deg=decision.steering_deg,
+            vel=action.vel, omega=action.omega, yaw_rate_rps=action.yaw_rate_rps, speed_mps=truth.speed_mps,
+            progress_m=truth.progress_m, lane_offset_m=truth.lane_offset_m, heading_error_deg=truth.heading_error_deg,
+            x_m=truth.x_m, y_m=truth.y_m, yaw_rad=truth.yaw_rad, invalid_pose=truth.invalid_pose, collided=truth.collided,
+            obstacle_gap_m=truth.obstacle_gap_m, obstacle_present=present, tof_m=sensed.observation.ultrasonic_range_m,
+        )
+        self.path.append({"t_s": truth.t_s, "x_m": truth.x_m, "y_m": truth.y_m, "lane_offset_m": truth.lane_offset_m,
+                          "speed_mps": truth.speed_mps, "mode": cmd.mode.name if cmd else None})
+        self._k += 1
+        if not truth.invalid_pose:
+            self._take_obstacle_away(truth)
+        return Outcome(fields, f"v {truth.speed_mps:.2f} m/s", truth.speed_mps, truth.invalid_pose, truth.t_s)
+
+    def _take_obstacle_away(self, truth: Truth) -> None:
+        """Once the robot has stood still ``remove_after_s`` in front of the obstacle, it is taken away."""
+        if not self.world.has_obstacle:
+            return
+        still = truth.speed_mps <= STOPPED_SPEED_MPS and truth.t_s > 0.5
+        self._standing_since = (self._standing_since if self._standing_since is not None else truth.t_s) if still else None
+        if self._standing_since is not None and truth.t_s - self._standing_since >= self.o.remove_after_s:
+            self.world.remove_obstacle()
+
+    def close(self) -> None:
+        self.world.close()
+
+
+class Expert:
+    """The simulator's ground-truth pure pursuit (lane centre ``EXPERT_LOOKAHEAD_M`` ahead) at cruise: the upper bound."""
+
+    name = "expert"
+
+    def __init__(self, world: DuckietownWorld, cruise_mps: float) -> None:
+        self.world, self.cruise_mps = world, cruise_mps
+
+    def decide(self, sensed: Sensed) -> Decision:
+        action = curvature_action(self.cruise_mps, self.world.expert_curvature(EXPERT_LOOKAHEAD_M))
+        return Decision(math.nan, self.cruise_mps, action=action)
+
+
 def drive(options: DriveOptions, out_dir: str | Path | None = None,
           on_step: Callable[[int, int], None] | None = None) -> DriveResult:
     """Run one drive; with ``out_dir`` write its files there. A Ctrl-C stops cleanly with everything so far."""
@@ -101,79 +180,32 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
                             start_tile=o.start_tile, render=o.controller != "expert" or o.video)
     camera = duckiebot_camera(o.width_px, o.height_px)
     lane = duckietown_lane()
-    aim_m = lane.aim_m
     limits = duckiebot_limits(time_of_flight=o.range_sensor == "tof")
     lanes = HoughLaneSteering(camera=camera, fps=FRAME_RATE_HZ, ground=lane)
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
     guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=camera) if o.controller == "guarded" else None
     route = world.route_m()
     obstacle_xz = world.add_obstacle(o.obstacle, o.ahead_m) if o.obstacle is not None else None
-    recorder = Recorder(out, fps=FRAME_RATE_HZ, video=o.video)
-    total = math.ceil(o.seconds * FRAME_RATE_HZ)
-    samples: list[Sample] = []
-    guard_ms: list[float] = []
-    sim_ms: list[float] = []
-    truth: Truth = world.truth()
-    last_steer, standing_since, interrupted = 0.0, None, False
-    try:
-        for k in range(total):
-            frame = world.frame_bgr() if o.controller != "expert" else None
-            tof = world.tof_range_m() if o.range_sensor == "tof" else None
-            cmd: Command | None = None
-            began = time.perf_counter()
-            if guard is not None:
-                cmd = guard.step(Observation(t_s=truth.t_s, speed_mps=truth.speed_mps, frame=frame, ultrasonic_range_m=tof))
-                steering, speed = cmd.steering_deg, min(o.cruise_mps, cmd.speed_limit_mps)
-                action = steering_action(steering, speed, aim_m)
-            elif o.controller == "unguarded":
-                steering, _ = _unsupervised_steering(lanes, frame, last_steer, limits.max_steering_deg)
-                speed = o.cruise_mps
-                action = steering_action(steering, speed, aim_m)
-            else:
-                steering, speed = math.nan, o.cruise_mps
-                action = curvature_action(speed, world.expert_curvature(EXPERT_LOOKAHEAD_M))
-            mid = time.perf_counter()
-            last_steer = steering
-            present = world.has_obstacle
-            truth = world.step(action)
-            sim_ms.append(1e3 * (time.perf_counter() - mid))
-            if o.controller != "expert":
-                guard_ms.append(1e3 * (mid - began))
-            samples.append(Sample(truth.t_s, truth.speed_mps, truth.lane_offset_m, truth.progress_m, truth.invalid_pose, truth.collided,
-                                  truth.obstacle_gap_m, present, cmd.mode.name if cmd else None, cmd.strategy.name if cmd else None,
-                                  cmd.fear if cmd else None, _cause(cmd)))
-            fields = dict(
-                controller=o.controller, speed_target_mps=speed, applied_steering_deg=steering,
-                vel=action.vel, omega=action.omega, yaw_rate_rps=action.yaw_rate_rps, speed_mps=truth.speed_mps,
-                progress_m=truth.progress_m, lane_offset_m=truth.lane_offset_m, heading_error_deg=truth.heading_error_deg,
-                x_m=truth.x_m, y_m=truth.y_m, yaw_rad=truth.yaw_rad, invalid_pose=truth.invalid_pose, collided=truth.collided,
-                obstacle_gap_m=truth.obstacle_gap_m, obstacle_present=present, tof_m=tof,
-            )
-            analysis = cmd.perceived.analysis if cmd is not None and cmd.perceived is not None else None
-            recorder.frame(k, samples[-1].t_s, cmd, image=frame, analysis=analysis, caption=f"v {truth.speed_mps:.2f} m/s",
-                           speed_mps=truth.speed_mps, fields=fields)
-            if on_step is not None:
-                on_step(k + 1, total)
-            if truth.invalid_pose:
-                break
-            if world.has_obstacle:
-                standing_since = (standing_since if standing_since is not None else truth.t_s) if truth.speed_mps <= STOPPED_SPEED_MPS \
-                    and truth.t_s > 0.5 else None
-                if standing_since is not None and truth.t_s - standing_since >= o.remove_after_s:
-                    world.remove_obstacle()
-    except KeyboardInterrupt:
-        interrupted = True
-    finally:
-        recorder.close()
-        world.close()
-    summary = summarize_drive(samples, world.dt_s)
+    drive_world = DuckietownDrive(o, world, lane.aim_m)
+    controller: Controller
+    if guard is not None:
+        controller = Guarded(guard, o.cruise_mps)
+    elif o.controller == "unguarded":
+        controller = Unguarded("unguarded", lanes, lambda _s: o.cruise_mps, limits.max_steering_deg)
+    else:
+        controller = Expert(world, o.cruise_mps)
+    recorder = Recorder(out, fps=FRAME_RATE_HZ, video=o.video, mcap=o.mcap)
+    ran = run(drive_world, controller, recorder, on_frame=on_step, total=drive_world.total)
+    summary = summarize_drive(drive_world.samples, world.dt_s)
     summary.update(route_completion(summary["progress_m"], *route))
     summary.update(
         map=o.map_name, controller=o.controller, seed=o.seed, options={**asdict(o), "start_tile": o.start_tile},
-        obstacle_xz_m=obstacle_xz, interrupted=interrupted, aim_distance_m=aim_m,
-        timing=_timing(guard_ms, sim_ms),
+        obstacle_xz_m=obstacle_xz, interrupted=ran.interrupted, aim_distance_m=lane.aim_m,
+        timing=_timing(list(ran.controller_ms) if o.controller != "expert" else [], drive_world.sim_ms),
         camera=asdict(camera), vehicle=asdict(limits), rules=rules.name,
     )
+    if recorder.mcap_path is not None:
+        summary["mcap"] = {"path": str(recorder.mcap_path), "frames": recorder.frames}
     title = f"fearguard in Duckietown: {o.map_name}, {o.controller}" + (f", {o.obstacle} {o.ahead_m:g} m ahead" if o.obstacle else "")
     stats = recorder.stats
     summary["supervisor"] = stats.to_json() if stats.supervised_frames else None
@@ -182,8 +214,8 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     if o.plots and out is not None and recorder.frames:
         if stats.supervised_frames:
             recorder.plot_timeline(title, with_speed=True, rules=guard.rules if guard is not None else None)
-        plot_drive(read_jsonl(out / "log.jsonl"), out / "drive.png", title)
-    return DriveResult(summary, out, interrupted, recorder.video_path)
+        plot_drive(drive_world.path, out / "drive.png", title)
+    return DriveResult(summary, out, ran.interrupted, recorder.video_path)
 
 
 def _cause(cmd: Command | None) -> str | None:
@@ -204,7 +236,8 @@ def _timing(guard_ms: list[float], sim_ms: list[float]) -> dict[str, Any]:
 
 
 def plot_drive(records: list[dict[str, Any]], path: Path, title: str) -> Path:
-    """The path on the map coloured by mode, and the lane offset with the tape edges."""
+    """The path on the map coloured by mode, and the lane offset with the tape edges (``records``: per step t_s, x_m,
+    y_m, lane_offset_m, speed_mps, mode — kept by the world as it drives)."""
     import matplotlib
 
     matplotlib.use("Agg")

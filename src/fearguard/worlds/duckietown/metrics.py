@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from fearguard.policy import MODE_ORDER
 from fearguard.worlds.duckietown.preset import (
     WHEEL_OUTER_HALF_TRACK_M,
     WHITE_INNER_M,
@@ -29,7 +30,7 @@ from fearguard.worlds.duckietown.preset import (
     YELLOW_OUTER_M,
 )
 
-MODES = ("NORMAL", "CAUTION", "EMERGENCY")
+MODES = MODE_ORDER  # least to most cautious, as policy.Mode declares them
 STOPPED_SPEED_MPS = 0.02  # [m/s] at or below this the robot counts as standing
 RESUMED_PROGRESS_M = 0.2  # [m] driven after the obstacle was removed: the robot went on
 
@@ -88,32 +89,47 @@ def route_completion(progress_m: float, route_m: float, closed: bool) -> dict[st
 
 
 def summarize_drive(samples: Sequence[Sample], dt_s: float) -> dict[str, Any]:
-    """JSON-ready numbers of a drive (NaN/inf become None)."""
+    """JSON-ready numbers of a drive (NaN/inf become None): motion, the lane, the supervisor's modes, the obstacle."""
     if not samples:
         return {"steps": 0, "duration_s": 0.0, "progress_m": 0.0, "distance_m": 0.0, "departures": 0, "collisions": 0}
     speed = np.array([s.speed_mps for s in samples])
-    offsets = np.array([s.lane_offset_m for s in samples])
-    finite = offsets[np.isfinite(offsets)]
-    modes = [s.mode for s in samples]
-    strategies = [s.strategy for s in samples]
-    fears = [s.fear for s in samples if s.fear is not None]
-    gaps = [s.obstacle_gap_m for s in samples if s.obstacle_present]
     out: dict[str, Any] = {
         "steps": len(samples),
         "duration_s": len(samples) * dt_s,
         "progress_m": samples[-1].progress_m,
         "distance_m": float(speed.sum() * dt_s),
         "mean_speed_mps": float(speed.mean()),
+        **_lane_summary(np.array([s.lane_offset_m for s in samples])),
+        "invalid_pose": any(s.invalid_pose for s in samples),
+        "first_invalid_pose_t_s": next((s.t_s for s in samples if s.invalid_pose), None),
+        "collisions": rising_edges([s.collided for s in samples]),
+        "time_stopped_s": float(np.sum(speed <= STOPPED_SPEED_MPS) * dt_s),
+        **_mode_summary(samples, dt_s),
+    }
+    if any(s.obstacle_present for s in samples) or any(math.isfinite(s.obstacle_gap_m) for s in samples):
+        out["obstacle"] = _obstacle_summary(samples, [s.obstacle_gap_m for s in samples if s.obstacle_present])
+    return out
+
+
+def _lane_summary(offsets: np.ndarray) -> dict[str, Any]:
+    """Lane offset statistics, the share of time on a marking, departures and centre-line crossings."""
+    finite = offsets[np.isfinite(offsets)]
+    return {
         "lane_offset_rms_m": float(np.sqrt(np.mean(finite**2))) if finite.size else None,
         "lane_offset_max_m": float(np.abs(finite).max()) if finite.size else None,
         "lane_offset_mean_m": float(finite.mean()) if finite.size else None,
         "marking_share": float(np.mean([on_marking(d) for d in offsets])),
         "departures": rising_edges([departed(d) for d in offsets]),
         "centre_line_crossings": rising_edges([crossed_centre(d) for d in offsets]),
-        "invalid_pose": any(s.invalid_pose for s in samples),
-        "first_invalid_pose_t_s": next((s.t_s for s in samples if s.invalid_pose), None),
-        "collisions": rising_edges([s.collided for s in samples]),
-        "time_stopped_s": float(np.sum(speed <= STOPPED_SPEED_MPS) * dt_s),
+    }
+
+
+def _mode_summary(samples: Sequence[Sample], dt_s: float) -> dict[str, Any]:
+    """Time in each mode and strategy, EMERGENCY entries and fear (a drive without a supervisor has none)."""
+    modes = [s.mode for s in samples]
+    strategies = [s.strategy for s in samples]
+    fears = [s.fear for s in samples if s.fear is not None]
+    return {
         "guarded": any(m is not None for m in modes),
         "time_in_mode_s": {m: sum(dt_s for k in modes if k == m) for m in MODES},
         "time_in_strategy_s": {s: sum(dt_s for k in strategies if k == s) for s in sorted({k for k in strategies if k})},
@@ -121,9 +137,6 @@ def summarize_drive(samples: Sequence[Sample], dt_s: float) -> dict[str, Any]:
         "fear_mean": float(np.mean(fears)) if fears else None,
         "fear_max": float(np.max(fears)) if fears else None,
     }
-    if any(s.obstacle_present for s in samples) or any(math.isfinite(s.obstacle_gap_m) for s in samples):
-        out["obstacle"] = _obstacle_summary(samples, gaps)
-    return out
 
 
 def _obstacle_summary(samples: Sequence[Sample], gaps: Sequence[float]) -> dict[str, Any]:

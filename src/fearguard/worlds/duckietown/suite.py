@@ -10,16 +10,16 @@ criteria of issue 14 are checked at the end from the rows:
 from __future__ import annotations
 
 import json
-import multiprocessing
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import replace
+from dataclasses import asdict, fields, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from fearguard.report import json_value
+from fearguard.drive.plan import RunSpec
+from fearguard.drive.suite import process_pool, run_plan
+from fearguard.outputs.report import json_value
 from fearguard.worlds.duckietown.drive import DriveOptions, drive
 from fearguard.worlds.duckietown.report import suite_markdown
 
@@ -37,9 +37,10 @@ OBSTACLE_RUNS = (  # (name, map, obstacle, range sensor, controller): 1 m ahead 
 )
 
 
-def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None,
-         rand_seconds: float | None = None) -> list[tuple[str, DriveOptions]]:
-    """Every drive of the suite, experts first (the other rows are compared to them); randomised drives last ``rand_seconds``."""
+def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None, rand_seconds: float | None = None,
+         out_dir: str | Path | None = None) -> list[RunSpec]:
+    """Every drive of the suite as rows, experts first (the other rows are compared to them); randomised drives last
+    ``rand_seconds``. ``out_dir``: each drive writes its folder (log, summary, plots) there."""
     base = DriveOptions(seconds=seconds, plots=True)
     runs: list[tuple[str, DriveOptions]] = []
     for m in maps or LANE_MAPS:
@@ -51,16 +52,37 @@ def plan(seconds: float, seeds: int, maps: Sequence[str] | None = None,
         for c in ("expert", "guarded"):
             options = replace(base, map_name=DOMAIN_RAND_MAP, domain_rand=True, seed=seed, controller=c, seconds=rand_seconds or seconds)
             runs.append((f"{DOMAIN_RAND_MAP} rand {seed}", options))
-    return runs
+    folder = (lambda name, o: str(_folder(Path(out_dir), name, o))) if out_dir is not None else (lambda name, o: None)
+    return [RunSpec("duckietown", name, o.controller, o.seed, {**_options_json(o), "folder": folder(name, o)}) for name, o in runs]
 
 
-def _row(name: str, options: DriveOptions, s: dict[str, Any], experts: dict[str, float]) -> dict[str, Any]:
-    expert = experts.get(name) if options.obstacle is None else None
+def _options_json(options: DriveOptions) -> dict[str, Any]:
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(options).items()}
+
+
+def options_of(spec: RunSpec) -> DriveOptions:
+    """The DriveOptions a row names."""
+    known = {f.name for f in fields(DriveOptions)}
+    values = {k: (tuple(v) if isinstance(v, list) else v) for k, v in spec.options.items() if k in known}
+    return DriveOptions(**values)
+
+
+def run_row(spec: RunSpec, stop: object = None) -> dict[str, Any]:
+    """One drive of the suite (its folder written when the plan names one): the raw row; ``merge`` compares it with the
+    expert's. (A drive stops on Ctrl-C only, not on a stop signal: it is short.)"""
+    options = options_of(spec)
+    folder = spec.options.get("folder")
+    summary = drive(options, folder).summary
+    return {**_raw_row(spec.name, options, summary), "interrupted": bool(summary.get("interrupted"))}
+
+
+def _raw_row(name: str, options: DriveOptions, s: dict[str, Any]) -> dict[str, Any]:
+    """A drive's row before it is compared with the expert's (``merge`` adds ``progress_vs_expert_pct``)."""
     timing = s.get("timing", {})
     return {
         "run": name, "controller": options.controller, "map": options.map_name, "seed": options.seed, "domain_rand": options.domain_rand,
         "obstacle_kind": options.obstacle, "range_sensor": options.range_sensor,
-        "progress_m": s["progress_m"], "progress_vs_expert_pct": 100 * s["progress_m"] / expert if expert else None,
+        "progress_m": s["progress_m"], "progress_vs_expert_pct": None,
         "departures": s["departures"], "centre_line_crossings": s["centre_line_crossings"], "collisions": s["collisions"],
         "invalid_pose": s["invalid_pose"], "emergency_s": s["time_in_mode_s"]["EMERGENCY"], "lane_offset_rms_m": s.get("lane_offset_rms_m"),
         "lane_offset_max_m": s.get("lane_offset_max_m"), "marking_share": s["marking_share"], "obstacle": s.get("obstacle"),
@@ -107,48 +129,53 @@ def cost_line(rows: Sequence[dict[str, Any]]) -> str:
             f"step (physics + rendering): {sm:.1f} ms; fearguard = {100 * gm / sm:.0f} % of a simulator step")
 
 
-def _drive_summary(options: DriveOptions, folder: Path) -> dict[str, Any]:
-    """One drive of the suite (a top-level function, so a worker process can run it)."""
-    return drive(options, folder).summary
-
-
 def _folder(out: Path, name: str, options: DriveOptions) -> Path:
     return out / f"{name.replace(' ', '_').replace(',', '').replace('+', 'with')}_{options.controller}_{options.range_sensor}"
 
 
-def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps: Sequence[str] | None = None,
-              rand_seconds: float | None = None, jobs: int = 1, on_run: Callable[[str], None] | None = None) -> str:
-    """Run the plan (``jobs`` drives at a time, each in its own process); suite.md / suite.json rewritten after every drive.
+def merge(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]], str]:
+    """The rows compared with the expert's progress on the same run, the criteria, and the markdown (table, cost line,
+    PASS/FAIL per criterion)."""
+    experts = {r["run"]: r["progress_m"] for r in rows if r["controller"] == "expert"}
+    merged = []
+    for r in rows:
+        expert = experts.get(r["run"]) if r["obstacle_kind"] is None else None
+        row = {k: v for k, v in r.items() if k not in ("spec", "interrupted")}
+        row["progress_vs_expert_pct"] = 100 * r["progress_m"] / expert if expert else None
+        merged.append(row)
+    checks = criteria(merged)
+    markdown = suite_markdown(merged) + "\n" + cost_line(merged) + "\n\n" + "\n".join(
+        f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"
+    return merged, checks, markdown
 
-    Returns the markdown. Each drive writes its own folder (log, summary, plots).
-    """
+
+def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps: Sequence[str] | None = None,
+              rand_seconds: float | None = None, jobs: int = 1, on_run: Callable[[str], None] | None = None,
+              resume: bool = False) -> str:
+    """The plan through the one suite (``drive/suite.py``; ``jobs`` drives at a time, each in its own process); runs.jsonl
+    grows a row per drive, suite.md / suite.json are rewritten after every drive. Returns the markdown."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    runs = plan(seconds, seeds, maps, rand_seconds)
-    summaries: dict[int, dict[str, Any]] = {}
+    specs = plan(seconds, seeds, maps, rand_seconds, out)
+    finished: list[dict[str, Any]] = []
     markdown = ""
 
-    def finished(i: int, summary: dict[str, Any]) -> None:
+    def write(rows: Sequence[dict[str, Any]]) -> None:
         nonlocal markdown
-        summaries[i] = summary
-        experts = {runs[k][0]: summaries[k]["progress_m"] for k in summaries if runs[k][1].controller == "expert"}
-        rows = [_row(runs[k][0], runs[k][1], summaries[k], experts) for k in sorted(summaries)]
-        checks = criteria(rows)
-        markdown = suite_markdown(rows) + "\n" + cost_line(rows) + "\n\n" + "\n".join(
-            f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"
+        merged, checks, markdown = merge(rows)
         (out / "suite.md").write_text(markdown, encoding="utf-8")
-        (out / "suite.json").write_text(json.dumps(json_value({"rows": rows, "criteria": checks}), indent=2) + "\n", encoding="utf-8")
-        if on_run is not None:
-            name, options = runs[i]
-            on_run(f"{name} {options.controller}: progress {summary['progress_m']:.2f} m, departures {summary['departures']}, "
-                   f"collisions {summary['collisions']}, EMERGENCY {summary['time_in_mode_s']['EMERGENCY']:.1f} s")
+        (out / "suite.json").write_text(json.dumps(json_value({"rows": merged, "criteria": checks}), indent=2) + "\n", encoding="utf-8")
 
-    if jobs <= 1:
-        for i, (name, options) in enumerate(runs):
-            finished(i, _drive_summary(options, _folder(out, name, options)))
-        return markdown
-    with ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = {pool.submit(_drive_summary, options, _folder(out, name, options)): i for i, (name, options) in enumerate(runs)}
-        for future in as_completed(futures):
-            finished(futures[future], future.result())
+    def said(row: dict[str, Any]) -> None:
+        finished.append(row)
+        order = {spec.key: i for i, spec in enumerate(specs)}
+        write(sorted(finished, key=lambda r: order.get((r["spec"]["world"], r["spec"]["name"], r["spec"]["controller"],
+                                                        r["spec"]["seed"]), 0)))
+        if on_run is not None:
+            on_run(f"{row['run']} {row['controller']}: progress {row['progress_m']:.2f} m, departures {row['departures']}, "
+                   f"collisions {row['collisions']}, EMERGENCY {row['emergency_s']:.1f} s")
+
+    result = run_plan(specs, runs_log=out / "runs.jsonl", resume=resume, executor=process_pool(jobs) if jobs > 1 else None,
+                      on_row=said)
+    write(result.rows)
     return markdown

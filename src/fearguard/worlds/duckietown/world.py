@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from fearguard.errors import FearguardError
+from fearguard.errors import MapError, SimulatorMissing  # defined in errors.py, importable here
 from fearguard.worlds.duckietown.preset import (
     CAMERA_AHEAD_M,
     FRAME_RATE_HZ,
@@ -46,14 +46,6 @@ OBSTACLE_HEIGHT_M = {"duck": 0.06, "cone": 0.08, "duckiebot": 0.12}  # [m] as th
 OBSTACLE_MESH = {"duck": "duckie", "cone": "cone", "duckiebot": "duckiebot"}  # our names → the simulator's kinds
 TOF_RAYS = 11  # [-] rays across the time-of-flight cone
 ROUTE_LIMIT_M = 60.0  # [m] the longest route measured (a lap of the largest bundled loops is ~30 m)
-
-
-class SimulatorMissing(FearguardError):
-    """gym-duckietown is not installed in this Python environment."""
-
-
-class MapError(FearguardError):
-    """A map name or start the simulator does not know."""
 
 
 @dataclass(frozen=True)

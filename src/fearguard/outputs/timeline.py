@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from fearguard.cues import CUE_NAMES
-from fearguard.report import MODE_ORDER
+from fearguard.cues import CUE_NAMES, CUE_SPECS
+from fearguard.policy import MODE_ORDER
 from fearguard.supervisor import Command
 
 if TYPE_CHECKING:
@@ -77,8 +77,9 @@ def timeline_figure(trace: Trace, title: str = "", with_speed: bool = False, rul
     axes = fig.subplots(6, 1, sharex=True, height_ratios=(1, 1, 1, 1, 1, 0.8))
     fig.subplots_adjust(left=0.105, right=0.79, top=0.965, bottom=0.045, hspace=0.12)  # fixed: legends fit on the right
     cue, light, rng, fear, speed, mode = axes
-    for name in ("lane_confidence", "occlusion"):
-        cue.plot(t, trace.cues[name], lw=1, label=name)
+    for spec in CUE_SPECS:
+        if spec.panel == "share":  # the cues that are shares 0..1 (cues.CUE_SPECS decides)
+            cue.plot(t, trace.cues[spec.name], lw=1, label=spec.name)
     cue.set(ylim=(-0.05, 1.05), ylabel="share (0–1)")
     light.plot(t, trace.cues["brightness"], color="goldenrod", lw=1, label="brightness")
     if rules is not None:

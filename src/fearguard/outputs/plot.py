@@ -10,11 +10,10 @@ matplotlib.use("Agg")  # files only: no screen on the cars and CI machines this 
 import matplotlib.pyplot as plt
 import numpy as np
 
-from fearguard.cues import CUE_NAMES
+from fearguard.cues import CUE_NAMES, CUE_SPECS
 from fearguard.fuzzy.rulebase import RuleBase
 
-UNITS = {"lane_confidence": "0..1", "brightness": "grey level 0..255", "occlusion": "share hidden 0..1",
-         "obstacle_range_m": "m", "qr_staleness_s": "s", "fear": "0..1"}
+UNITS = {**{spec.name: spec.unit for spec in CUE_SPECS}, "fear": "0..1"}
 
 
 def _axis_label(name: str) -> str:

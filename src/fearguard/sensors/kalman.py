@@ -55,10 +55,10 @@ def _import_filterpy() -> None:
     if "filterpy" in sys.modules or "scipy.stats" in sys.modules:
         importlib.import_module("filterpy.kalman")
         return
-    stand_ins = {name: types.ModuleType(name, f"{name}, imported on first use (fearguard.kalman)") for name in _DEFERRED}
+    stand_ins = {name: types.ModuleType(name, f"{name}, imported on first use (fearguard.sensors.kalman)") for name in _DEFERRED}
     stand_ins[_STATS].logpdf = _logpdf  # type: ignore[attr-defined]  # the one name filterpy's filters take from it
     if _LINALG not in sys.modules:
-        stand_ins[_LINALG] = _LinalgStandIn(_LINALG, f"{_LINALG}, imported on first use (fearguard.kalman)")
+        stand_ins[_LINALG] = _LinalgStandIn(_LINALG, f"{_LINALG}, imported on first use (fearguard.sensors.kalman)")
     sys.modules.update(stand_ins)
     try:
         importlib.import_module("filterpy.kalman")

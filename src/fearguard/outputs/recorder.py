@@ -4,7 +4,7 @@ A driver is anything that produces frames and asks the supervisor: ``fearguard r
 the built-in closed loop (``sim/loop.py``), or a third-party world such as gym-duckietown. Each uses
 only this API::
 
-    from fearguard.recorder import Recorder
+    from fearguard.outputs.recorder import Recorder
 
     with Recorder(out_dir, fps=20.0, video=True) as rec:         # opens log.jsonl now, the video on frame 1
         for k, obs in enumerate(world):
@@ -12,7 +12,7 @@ only this API::
             rec.frame(k, obs.t_s, cmd, image=obs.frame_bgr,       # image: only needed with video=True
                       analysis=None, caption=f"v {v:.2f} m/s",    # what the overlay draws (lanes, lead box)
                       speed_mps=v, fields={"x_m": x})             # extra log fields (JSON values)
-            if stop:                                              # fearguard.interrupt.StopSignal
+            if stop:                                              # fearguard.drive.interrupt.StopSignal
                 break
     stats = rec.stats                                             # CommandStats: typed, built in memory
     rec.write_summary({"frames": rec.frames, **stats.to_json()})  # summary.json, written atomically
@@ -43,13 +43,16 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from fearguard.cues import CUE_NAMES
-from fearguard.report import LEVEL_ORDER, MODE_ORDER, JsonlLog, command_record, json_value
+from fearguard.fear import LEVEL_ORDER
+from fearguard.outputs.report import JsonlLog, command_record, json_value
+from fearguard.outputs.timeline import Trace, plot_timeline
+from fearguard.outputs.video import VideoSink, open_video
+from fearguard.policy import MODE_ORDER
 from fearguard.supervisor import Command
-from fearguard.timeline import Trace, plot_timeline
-from fearguard.video import VideoSink, open_video
 
 if TYPE_CHECKING:
     from fearguard.fuzzy.rulebase import RuleBase
+    from fearguard.outputs.mcap import McapSink
 
 LOG_NAME = "log.jsonl"
 SUMMARY_NAME = "summary.json"
@@ -214,16 +217,23 @@ class _Stats:
 class Recorder:
     """Writes one run's files as it goes: the flushed log, the optional annotated video; keeps stats and a trace."""
 
-    def __init__(self, out_dir: str | Path | None, *, fps: float, video: bool = False, video_kind: str | None = None) -> None:
-        """Open ``out_dir/log.jsonl`` (``out_dir`` None: nothing on disk); the video opens on the first frame."""
+    def __init__(self, out_dir: str | Path | None, *, fps: float, video: bool = False, video_kind: str | None = None,
+                 mcap: bool = False) -> None:
+        """Open ``out_dir/log.jsonl`` (``out_dir`` None: nothing on disk); the video opens on the first frame; ``mcap``:
+        also ``run.mcap`` for Foxglove (outputs/mcap.py)."""
         self.out_dir = None if out_dir is None else Path(out_dir)
         self.fps = fps
         self.trace = Trace()
         self._stats = _Stats()
         self._log = JsonlLog(self.out_dir / LOG_NAME) if self.out_dir is not None else None
         self._video: VideoSink | None = None
+        self._mcap: McapSink | None = None
         if video and self.out_dir is not None:
             self._video = open_video(self.out_dir / VIDEO_STEM, fps, video_kind)
+        if mcap and self.out_dir is not None:
+            from fearguard.outputs.mcap import MCAP_NAME, McapSink  # the optional mcap package, only for runs that ask
+
+            self._mcap = McapSink(self.out_dir / MCAP_NAME)
 
     @property
     def frames(self) -> int:
@@ -239,6 +249,15 @@ class Recorder:
         return self._video.path if self._video is not None else None
 
     @property
+    def mcap_path(self) -> Path | None:
+        return self._mcap.path if self._mcap is not None else None
+
+    @property
+    def annotates(self) -> bool:
+        """Whether frames are drawn on (a video or run.mcap is written): a driver passes its frame analysis only then."""
+        return self._video is not None or self._mcap is not None
+
+    @property
     def video_frames_rescaled(self) -> int:
         """Frames of another size than the first, scaled into the video (none dropped)."""
         return self._video.rescaled if self._video is not None else 0
@@ -248,25 +267,37 @@ class Recorder:
         return self._stats.snapshot()
 
     def frame(self, frame: int, t_s: float, cmd: Command | None, *, image: np.ndarray | None = None, analysis: Any = None,
-              caption: str = "", speed_mps: float | None = None, fields: Mapping[str, Any] | None = None) -> None:
-        """Record one frame: the video frame first (when recording video and given an image), then the log line."""
-        if self._video is not None and image is not None:
-            from fearguard.overlay import annotate  # OpenCV drawing, only for runs with a video
+              caption: str = "", speed_mps: float | None = None, fields: Mapping[str, Any] | None = None,
+              stamp_ns: int | None = None) -> None:
+        """Record one frame: the video frame and run.mcap's messages first (when written), then the log line.
 
-            self._video.write(annotate(image, cmd, analysis, caption))
+        ``stamp_ns``: the recording's own time of this frame for run.mcap (default ``t_s`` in ns)."""
+        annotated = None
+        if self.annotates and image is not None:
+            from fearguard.outputs.overlay import annotate  # OpenCV drawing, only for runs with a video or run.mcap
+
+            annotated = annotate(image, cmd, analysis, caption)
+        if self._video is not None and annotated is not None:
+            self._video.write(annotated)
+        if self._mcap is not None:
+            self._mcap.write(stamp_ns if stamp_ns is not None else round(t_s * 1e9), cmd, annotated)
         if self._log is not None:
             self._log.write(command_record(frame, t_s, cmd, **(fields or {})))
         self._stats.add(frame, t_s, cmd)
         self.trace.add(t_s, cmd, speed_mps)
 
     def close(self) -> None:
-        """Close the log and the video (safe to call twice)."""
+        """Close the log, the video and run.mcap (safe to call twice)."""
         try:
             if self._log is not None:
                 self._log.close()
         finally:
-            if self._video is not None:
-                self._video.close()
+            try:
+                if self._video is not None:
+                    self._video.close()
+            finally:
+                if self._mcap is not None:
+                    self._mcap.close()
 
     def __enter__(self) -> Recorder:
         return self

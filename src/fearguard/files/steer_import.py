@@ -12,11 +12,7 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
-from fearguard.errors import FearguardError
-
-
-class SteerImportError(FearguardError):
-    """A ``module:function`` that does not name a usable steering function."""
+from fearguard.errors import SteerImportError  # defined in errors.py, importable here
 
 
 def resolve_steer(steer: Callable[[Any], Any] | str | None) -> tuple[Callable[[Any], Any] | None, str]:

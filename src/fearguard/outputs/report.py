@@ -16,13 +16,8 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from fearguard.cues import CUE_NAMES
-from fearguard.fear import FearLevel
-from fearguard.policy import Mode
-from fearguard.reader import loads_json
+from fearguard.files.reader import loads_json
 from fearguard.supervisor import Command
-
-MODE_ORDER = tuple(m.name for m in Mode)
-LEVEL_ORDER = tuple(level.name for level in FearLevel)
 
 
 def json_value(value: Any) -> Any:

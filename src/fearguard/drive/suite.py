@@ -1,0 +1,120 @@
+"""The one suite: run a plan row by row, append each finished row to runs.jsonl at once, resume what is missing.
+
+Every world's suite is a plan (``drive/plan.py``) run through ``run_plan``; the world's ``merge`` turns the rows into
+its tables. Rows come back in plan order whatever order they finished in. An interrupted suite (a stop signal, Ctrl-C)
+keeps every finished row in ``runs.jsonl``, a valid JSON Lines file; ``resume`` runs only the rows not in it. A run cut
+short by a stop is not a result: it is left out, and the suite stops there.
+
+``executor`` runs the rows: None runs them one after the other in this process; ``process_pool(jobs)`` in worker
+processes on this machine (each row is independent and deterministic: the rows are the same however they ran).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from fearguard.drive.interrupt import StopSignal
+from fearguard.drive.plan import RunSpec, row_key, run_row
+from fearguard.outputs.report import JsonlLog, read_jsonl
+
+Row = dict[str, Any]
+Executor = Callable[[Sequence[RunSpec], StopSignal | None], Iterator[tuple[int, Row]]]  # (index, row) of each spec, any order
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """Every row (resumed and new) in plan order, the size of the plan, and whether it was cut short."""
+
+    rows: list[Row]
+    planned: int  # runs in the whole plan
+    resumed: int  # rows read back from an earlier, interrupted suite
+    interrupted: bool = False
+    stopped_by: str | None = None
+
+
+def serial(specs: Sequence[RunSpec], stop: StopSignal | None = None) -> Iterator[tuple[int, Row]]:
+    """One row after the other, in this process (a stop signal reaches the run under way: it ends after its frame)."""
+    for i, spec in enumerate(specs):
+        yield i, run_row(spec, stop)
+
+
+def process_pool(jobs: int) -> Executor:
+    """``jobs`` rows at a time, each in its own worker process (spawned: a simulator's global state stays its own)."""
+
+    def execute(specs: Sequence[RunSpec], stop: StopSignal | None = None) -> Iterator[tuple[int, Row]]:
+        pool = ProcessPoolExecutor(max_workers=jobs, mp_context=multiprocessing.get_context("spawn"))
+        try:
+            futures = {pool.submit(run_row, spec): i for i, spec in enumerate(specs)}
+            for future in as_completed(futures):
+                yield futures[future], future.result()
+        finally:  # a stop, Ctrl-C or a failed row: the rows not started are cancelled
+            pool.shutdown(wait=True, cancel_futures=True)
+
+    return execute
+
+
+def finished_rows(path: Path | None) -> list[Row]:
+    """The rows of an earlier suite's runs.jsonl (a torn last line from a killed suite is left out)."""
+    if path is None or not path.is_file():
+        return []
+    return [r for r in read_jsonl(path) if isinstance(r, dict) and row_key(r) is not None]
+
+
+def run_plan(
+    plan: Sequence[RunSpec], *, runs_log: Path | None = None, resume: bool = False, stop: StopSignal | None = None,
+    executor: Executor | None = None, on_row: Callable[[Row], None] | None = None,
+    on_progress: Callable[[int, int], None] | None = None,
+) -> PlanResult:
+    """Run the rows of ``plan`` not already done; each finished row appended to ``runs_log`` (flushed) as it arrives.
+
+    ``on_row(row)`` after each new row; ``on_progress(done, planned)`` before the first and after each row (resumed
+    rows count as done). A row whose run was interrupted ends the suite without being kept.
+    """
+    done = finished_rows(runs_log) if resume else []
+    known = {row_key(r): r for r in done}
+    by_index: dict[int, Row] = {i: known[spec.key] for i, spec in enumerate(plan) if spec.key in known}
+    todo = [(i, spec) for i, spec in enumerate(plan) if spec.key not in known]
+    log = JsonlLog(runs_log) if runs_log is not None else None  # rewritten: the resumed rows, then each new one
+
+    def keep(index: int, row: Row) -> None:
+        by_index[index] = row
+        if log is not None:
+            log.write(row)
+        if on_row is not None:
+            on_row(row)
+        if on_progress is not None:
+            on_progress(len(by_index), len(plan))
+
+    interrupted = False
+    try:
+        for row in done if log is not None else ():
+            log.write(row)
+        if on_progress is not None:
+            on_progress(len(by_index), len(plan))
+        interrupted = _run_rows(todo, executor or serial, stop, keep)
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        if log is not None:
+            log.close()
+    ordered = [by_index[i] for i in sorted(by_index)]
+    return PlanResult(ordered, len(plan), len(done), interrupted or bool(stop), stop.name if stop else None)
+
+
+def _run_rows(todo: Sequence[tuple[int, RunSpec]], executor: Executor, stop: StopSignal | None,
+              keep: Callable[[int, Row], None]) -> bool:
+    """Run the rows still to do, keeping each as it arrives; True when a run was cut short (its row is not kept)."""
+    if stop or not todo:
+        return False
+    for k, row in executor([spec for _, spec in todo], stop):
+        if row.get("interrupted"):
+            return True
+        keep(todo[k][0], row)
+        if stop:
+            return False
+    return False

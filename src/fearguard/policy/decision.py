@@ -1,0 +1,142 @@
+"""One frame's decision as named steps over plain values: the speed caps, the steering choice, the explanation.
+
+The supervisor keeps the clock, the state (mode machine, recovery, the steering it trusts) and the faults; each step
+here is a pure function of what it is handed, so each can be tested, and read, on its own:
+
+    envelope_step   the stopping envelope for the obstacle range (RSS), and the distance it plans with
+    lane_step       the lane check's verdict → the steering wanted, a cap, CAUTION, and whether the estimator is distrusted
+    emergency_step  an EMERGENCY plan → the strategy, its cap, the steering (a creep steers by the lane seen now)
+    motion_reasons  why the obstacle binds: an imminent collision, or a proper response inside the safe distance
+    limit_reason    which cap set the speed limit
+    rule_reasons    the rules that drove fear, and perception's facts, when fear is up or the mode is not NORMAL
+
+Speed limit = the smallest cap (fear, envelope, lane check, emergency plan, lateral), rate-limited upward
+(``speed.rate_limited_mps``): a step can only add a cap, never lift one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from fearguard.fear import Cause, FearLevel, FearResult
+from fearguard.policy.config import Mode, PolicyConfig, Strategy
+from fearguard.policy.emergency import EmergencyPlan
+from fearguard.policy.lane_check import LaneCheck
+from fearguard.policy.speed import envelope_speed_mps, lead_speed_mps
+from fearguard.readings import finite_reading
+from fearguard.vehicle import VehicleLimits
+
+TOP_RULES_IN_REASONS = 3  # [-] rules quoted in a command's reasons
+
+
+def measured_speed(reading_mps: object, vehicle: VehicleLimits) -> tuple[float | None, float]:
+    """(the measured speed, None when it is no speed ≥ 0; the speed to plan with: unknown counts as the top speed)."""
+    speed = finite_reading(reading_mps)
+    speed = speed if speed is not None and speed >= 0 else None
+    return speed, vehicle.max_speed_mps if speed is None else speed
+
+
+def first_limit_mps(speed_mps: float | None, vehicle: VehicleLimits) -> float:
+    """Where the speed limit's ramp starts on the first frame: the car's measured speed (within its top speed), else 0."""
+    return min(speed_mps if speed_mps is not None else 0.0, vehicle.max_speed_mps)
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """The stopping envelope's speed and the distance it plans with."""
+
+    speed_mps: float  # inf: nothing is known in range
+    seen_m: float  # [m] the obstacle's range, or — nothing in range on a car with a range sensor — the sensor's maximum
+
+
+def envelope_step(range_m: float, speed_mps: float | None, closing_mps: float | None, vehicle: VehicleLimits) -> Envelope:
+    """Nothing in range on a car with a range sensor: an obstacle may stand just beyond what it sees, so the car must
+    stop within that; a range: the responsibility-sensitive distance to the object at its estimated speed."""
+    seen_m = range_m if math.isfinite(range_m) or not vehicle.has_ultrasonic else vehicle.ultrasonic_max_range_m
+    lead = lead_speed_mps(speed_mps, closing_mps) if seen_m == range_m else 0.0
+    return Envelope(envelope_speed_mps(seen_m, vehicle, lead), seen_m)
+
+
+@dataclass(frozen=True)
+class SteeringChoice:
+    """What the lane check makes of the wrapped steering this frame."""
+
+    steering_deg: float  # the steering wanted
+    caution: bool  # the answer is at least CAUTION (the estimator is overridden)
+    cap_mps: float  # inf: no cap
+    reason: str  # "" when nothing to say
+    distrusted: bool  # remember: the estimator steered out of the lane when last checked
+
+
+def lane_step(check: LaneCheck | None, distrusted: bool, steering_deg: float, lane_now_deg: float | None, trusted_deg: float,
+              cfg: PolicyConfig, vehicle: VehicleLimits) -> SteeringChoice:
+    """The lane check's override; while the check cannot run (road not calm, not moving) an estimator it last caught
+    steering out of the lane is not trusted again: steer by the lane seen now (a stale angle drives out of a bending
+    lane), else hold the last trusted angle."""
+    cap = cfg.lane_check_fraction * vehicle.max_speed_mps
+    if check is not None and check.override_deg is not None:
+        return SteeringChoice(check.override_deg, True, cap, check.why, True)
+    if check is None and distrusted:
+        wanted = lane_now_deg if lane_now_deg is not None else trusted_deg
+        source = "steering by the lane geometry seen now" if lane_now_deg is not None else "holding the lane geometry's last"
+        why = f"lane check: the estimator steered out of the lane when last checked: {source} {wanted:+.1f} deg"
+        return SteeringChoice(wanted, True, cap, why, True)
+    return SteeringChoice(steering_deg, False, math.inf, "", distrusted and check is None)
+
+
+@dataclass(frozen=True)
+class EmergencyChoice:
+    """The EMERGENCY plan as answered: strategy, the cause it answers, its cap, the steering, and why."""
+
+    strategy: Strategy
+    cause: Cause | None
+    cap_mps: float
+    steering_deg: float
+    reasons: tuple[str, ...]
+
+
+def emergency_step(plan: EmergencyPlan, creep: str, lane_now_deg: float | None, wanted_deg: float, status: str) -> EmergencyChoice:
+    """The plan's steering (else the one wanted); a creep steers closed-loop by the lane seen now; a stop says what the
+    recovery is doing (``status``)."""
+    steering = plan.steering_deg if plan.steering_deg is not None else wanted_deg
+    reasons = [f"EMERGENCY {plan.strategy.name}: {plan.why}"]
+    if creep and lane_now_deg is not None:
+        steering = lane_now_deg
+        reasons.append(f"creep steering by the lane geometry seen now: {lane_now_deg:+.1f} deg")
+    if not creep and status and plan.strategy is Strategy.STOP:
+        reasons.append(status)
+    return EmergencyChoice(plan.strategy, plan.cause, plan.cap_mps, steering, tuple(reasons))
+
+
+def motion_reasons(imminent: bool, envelope_mps: float, range_m: float, speed_now_mps: float, speed_mps: float | None,
+                   closing_mps: float | None, vehicle: VehicleLimits) -> tuple[str, ...]:
+    """Why the obstacle binds: no braking avoids it (imminent), or the car is inside its safe distance (brake to it)."""
+    if imminent:
+        return (f"imminent collision: obstacle at {range_m:.2f} m, no braking within {vehicle.max_decel_mps2:.1f} m/s² "
+                f"avoids it from {speed_now_mps:.2f} m/s",)
+    if envelope_mps < speed_now_mps and math.isfinite(range_m):
+        return (f"proper response: inside the safe distance of the object at {range_m:.2f} m (its speed "
+                f"{lead_speed_mps(speed_mps, closing_mps):.2f} m/s): braking to {envelope_mps:.2f} m/s",)
+    return ()
+
+
+def limit_reason(limit: float, fear_limit: float, envelope: float, target: float, range_m: float, lateral: float) -> str:
+    """Which cap set the speed limit (or that it is still rising toward it)."""
+    if limit < target - 1e-12:
+        return f"speed limit {limit:.2f} m/s: rising at the comfort acceleration toward {target:.2f} m/s"
+    if envelope <= fear_limit and envelope <= target + 1e-12 and not math.isinf(envelope):
+        return f"speed limit {limit:.2f} m/s: safe distance envelope for an obstacle at {range_m:.2f} m"
+    if lateral <= target + 1e-12:
+        return f"speed limit {limit:.2f} m/s: lateral acceleration at this steering angle"
+    if fear_limit <= target + 1e-12:
+        return f"speed limit {limit:.2f} m/s: set by fear"
+    return f"speed limit {limit:.2f} m/s: set by the emergency strategy"
+
+
+def rule_reasons(result: FearResult, mode: Mode, facts: Sequence[str]) -> tuple[str, ...]:
+    """The rules that drove fear and perception's facts — when fear is above VERY_LOW or the mode is not NORMAL."""
+    if result.level <= FearLevel.VERY_LOW and mode is Mode.NORMAL:
+        return ()
+    return (*(f"rule {text!r} fired {s:.2f}" for text, s in result.top_rules(TOP_RULES_IN_REASONS)), *facts)

@@ -1,0 +1,179 @@
+"""Emergency: analyse, then act — the plan each active cause proposes, and the re-acquisition creep after a road stop."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+from fearguard.fear import Cause
+from fearguard.observation import Lead
+from fearguard.policy.config import TIME_EPS_S, Mode, PolicyConfig, Strategy
+from fearguard.policy.modes import ModeState
+from fearguard.vehicle import VehicleLimits
+
+
+class _Priority(Enum):
+    """Tie-break among equal caps: the most protective strategy is reported."""
+
+    STOP = 0
+    FOLLOW_LEAD = 1
+    CRAWL = 2
+
+
+@dataclass(frozen=True)
+class EmergencyPlan:
+    """What to do in EMERGENCY: the strategy, its speed cap, and the steering to use (None = pass)."""
+
+    strategy: Strategy
+    cap_mps: float
+    steering_deg: float | None
+    why: str
+    cause: Cause | None = None  # the hazard this plan answers; None for a fault
+
+
+def active_causes(cause_fears: Mapping[Cause, float], state: ModeState, cfg: PolicyConfig) -> frozenset[Cause]:
+    """Causes an EMERGENCY plan answers: latched at or since entry, or now at or above the exit threshold."""
+    now = {c for c in Cause if cause_fears.get(c, 0.0) >= cfg.emergency_exit_fear}
+    return frozenset({c for c, _ in state.latched} | now)
+
+
+CAUSE_WORDS = {  # what each cause means, for reasons that name it after its fear has gone
+    Cause.COLLISION: "a collision risk",
+    Cause.ROAD: "the road picture was lost",
+    Cause.LOCALISATION: "the localisation went stale",
+}
+
+
+def _cause_text(cause: Cause, fear: float, state: ModeState, cfg: PolicyConfig, t_s: float | None) -> str:
+    """Why a cause is active: its fear now, or — latched, its fear already below the exit threshold — the hold."""
+    below = dict(state.latched).get(cause)
+    if below is None or fear >= cfg.emergency_exit_fear:
+        return {Cause.COLLISION: f"collision risk (fear {fear:.2f})", Cause.ROAD: f"road not trusted (fear {fear:.2f})",
+                Cause.LOCALISATION: f"localisation stale (fear {fear:.2f})"}[cause]
+    left = f" ({max(0.0, cfg.hold_s - (t_s - below)):.1f} s left)" if t_s is not None else ""
+    return f"holding EMERGENCY for {cfg.hold_s:g} s after {CAUSE_WORDS[cause]}{left}"
+
+
+def emergency_plan(
+    cause_fears: Mapping[Cause, float],
+    state: ModeState,
+    lead: Lead | None,
+    held_steering_deg: float,
+    cfg: PolicyConfig,
+    vehicle: VehicleLimits,
+    creep: str = "",
+    t_s: float | None = None,
+) -> EmergencyPlan:
+    """Analyse, then act: every active cause proposes a plan; the one with the lowest cap wins.
+
+    Active: latched at or since entry, or now at or above the exit threshold. A cue getting worse can
+    only add causes, so it can only lower the cap: the speed limit stays monotone in every cue.
+    ``creep`` (the recovery's reason, empty = none): the road-picture stop becomes a bounded CRAWL to
+    re-acquire the road (the supervisor allows it only with the range clear and no fault). ``t_s`` (now) lets
+    a cause kept by the hold say how long is left.
+    """
+    active = active_causes(cause_fears, state, cfg)
+    stop = EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg, f"fault: stop, holding {held_steering_deg:+.1f} deg")
+    plans = [stop] if state.fault else []
+    crawl_cap = cfg.crawl_fraction * vehicle.max_speed_mps
+    for cause in sorted(active, key=list(Cause).index):
+        why = _cause_text(cause, cause_fears.get(cause, 0.0), state, cfg, t_s)
+        if cause is Cause.COLLISION:
+            plans.append(EmergencyPlan(Strategy.STOP, 0.0, None, f"{why}: stop", cause))
+        elif cause is Cause.ROAD and lead is not None and lead.usable:
+            rng = lead.usable_range_m
+            cap = rng / cfg.follow_time_gap_s if rng is not None else crawl_cap
+            bearing = float(lead.bearing_deg)  # usable: a reading (readings.py), e.g. a Fraction, as a float
+            steer = float(np.clip(cfg.follow_gain * bearing, -vehicle.max_steering_deg, vehicle.max_steering_deg))
+            gap = f"range {rng:.2f} m, {cfg.follow_time_gap_s:.1f} s gap" if rng is not None else "no range: crawl speed"
+            follow = f"{why}: follow the lead at bearing {bearing:+.1f} deg ({gap})"
+            plans.append(EmergencyPlan(Strategy.FOLLOW_LEAD, cap, steer, follow, cause))
+        elif cause is Cause.ROAD and creep:
+            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap, held_steering_deg,
+                                       f"{why}, range clear: {creep}, holding {held_steering_deg:+.1f} deg", cause))
+        elif cause is Cause.ROAD:
+            plans.append(EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg,
+                                       f"{why} and no lead to follow: stop, holding {held_steering_deg:+.1f} deg", cause))
+        else:
+            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap, None, f"{why}: crawl", cause))
+    best = min(plans, key=lambda p: (p.cap_mps, _Priority[p.strategy.name].value), default=stop)
+    road_steer = [p.steering_deg for p in plans if p.steering_deg is not None]
+    steering = best.steering_deg if best.steering_deg is not None else (road_steer[0] if road_steer else None)
+    return EmergencyPlan(best.strategy, best.cap_mps, steering, best.why, best.cause)
+
+
+# -- recovery: analyse, then act ------------------------------------------------------------------
+@dataclass(frozen=True)
+class Recovery:
+    """The re-acquisition memory of one EMERGENCY: creeps done, distance crept, the dwell and the creep under way."""
+
+    creeps: int = 0  # creeps started in this EMERGENCY
+    total_m: float = 0.0  # distance crept in this EMERGENCY
+    still_since_s: float | None = None  # standing still (eligible) since
+    creep_since_s: float | None = None  # the current creep started at (None: not creeping)
+    creep_m: float = 0.0  # distance of the current creep
+
+
+def recovery_eligible(
+    state: ModeState, active: frozenset[Cause], range_m: float, lead: Lead | None, imminent: bool,
+) -> bool:
+    """An EMERGENCY caused by the road picture alone: no fault, no collision cause, range clear, no lead to follow."""
+    return (
+        state.mode is Mode.EMERGENCY and not state.fault and not imminent and Cause.ROAD in active
+        and Cause.COLLISION not in active and math.isinf(range_m) and range_m > 0 and (lead is None or not lead.usable)
+    )
+
+
+def next_recovery(
+    rec: Recovery, eligible: bool, t_s: float, dt_s: float, speed_mps: float, cfg: PolicyConfig, lane_seen: bool = True,
+) -> tuple[Recovery, str]:
+    """Advance the recovery one frame; returns the new memory and, while creeping, the creep's reason (else "").
+
+    After ``recovery_dwell_s`` at standstill the car creeps at most ``recovery_creep_m`` and ``recovery_creep_s``,
+    at most ``recovery_max_creeps`` times and ``recovery_max_total_m`` in all; not eligible = no creep now (a creep
+    under way ends). A creep starts only while something of the lane is seen (``lane_seen``): creeping blind cannot
+    re-acquire a road that is not there; a flicker of the picture during a creep does not end it.
+    The distance is the speed integrated over time (unknown speed counts as the top speed: the creep ends sooner).
+    """
+    moved = max(0.0, speed_mps) * max(dt_s, 0.0)
+    if rec.creep_since_s is not None:
+        creep_m, total_m = rec.creep_m + moved, rec.total_m + moved
+        done = (creep_m >= cfg.recovery_creep_m or t_s - rec.creep_since_s >= cfg.recovery_creep_s - TIME_EPS_S
+                or total_m >= cfg.recovery_max_total_m)
+        if eligible and not done:
+            why = (f"re-acquisition creep {rec.creeps} of {cfg.recovery_max_creeps} "
+                   f"({creep_m:.2f} of {cfg.recovery_creep_m:.2f} m, {t_s - rec.creep_since_s:.1f} of {cfg.recovery_creep_s:.1f} s)")
+            return Recovery(rec.creeps, total_m, None, rec.creep_since_s, creep_m), why
+        return Recovery(rec.creeps, total_m), ""
+    if speed_mps > cfg.standstill_mps or recovery_exhausted(rec, cfg):
+        return Recovery(rec.creeps, rec.total_m), ""
+    still = t_s if rec.still_since_s is None else rec.still_since_s
+    if not (eligible and lane_seen) or t_s - still < cfg.recovery_dwell_s - TIME_EPS_S:
+        return Recovery(rec.creeps, rec.total_m, still), ""  # the dwell counts standing still; the creep waits
+    why = f"re-acquisition creep {rec.creeps + 1} of {cfg.recovery_max_creeps} after {t_s - still:.1f} s at standstill"
+    return Recovery(rec.creeps + 1, rec.total_m, None, t_s, 0.0), why
+
+
+def recovery_exhausted(rec: Recovery, cfg: PolicyConfig) -> bool:
+    """No creep left in this EMERGENCY: the car stays stopped."""
+    return rec.creeps >= cfg.recovery_max_creeps or rec.total_m >= cfg.recovery_max_total_m
+
+
+def recovery_status(rec: Recovery, eligible: bool, cfg: PolicyConfig, t_s: float, lane_seen: bool = True) -> str:
+    """What the recovery is doing while the car is stopped by the road picture (for the reasons)."""
+    if not eligible:
+        return ""
+    if recovery_exhausted(rec, cfg):
+        return (f"recovery exhausted: {rec.creeps} creep(s), {rec.total_m:.2f} m crept, the road is still not seen: "
+                f"staying stopped")
+    if not lane_seen:
+        return (f"recovery: nothing of the lane seen (confidence below {cfg.recovery_min_confidence:.2f}): "
+                f"a creep cannot re-acquire it, staying stopped")
+    if rec.still_since_s is not None:
+        return f"recovery: analysing at standstill ({t_s - rec.still_since_s:.1f} of {cfg.recovery_dwell_s:.1f} s before a creep)"
+    return "recovery: waiting for standstill before a creep"
+
