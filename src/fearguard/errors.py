@@ -5,8 +5,8 @@
     │   ├── CalibrationError        chessboard photos cannot calibrate (vision/calibration.py)
     │   ├── SteerImportError        a ``module:function`` that names no usable steering function (files/steer_import.py)
     │   ├── SetupError              a vehicle, preset or steering function the testing kit cannot use (testing/subject.py)
-    │   ├── SimulatorMissing        gym-duckietown is not installed in this environment (worlds/duckietown/world.py)
-    │   ├── MapError                a map name or start the simulator does not know (worlds/duckietown/world.py)
+    │   ├── SimulatorMissing        gym-duckietown or MetaDrive is not installed (worlds/duckietown/world.py, metadrive/headless.py)
+    │   ├── MapError                a map, start or placement a simulator cannot build (worlds/duckietown/world.py, metadrive/world.py)
     │   └── FileError               a file is wrong: ``FileError(path, where, problem)`` → "path, where: problem"
     │       ├── RuleError           a rule-base file and its [policy] table (fuzzy/loader.py)
     │       ├── CameraError         camera.toml (camera.py)
@@ -138,8 +138,8 @@ class SetupError(FearguardError):
 
 
 class SimulatorMissing(FearguardError):
-    """gym-duckietown is not installed in this Python environment."""
+    """A simulator (gym-duckietown, MetaDrive) is not installed in this Python environment."""
 
 
 class MapError(FearguardError):
-    """A map name or start the simulator does not know."""
+    """A map name, start, block string or placement the simulator does not know or cannot build."""

@@ -20,6 +20,7 @@ from fearguard.drive.interrupt import StopSignal
 ROW_RUNNERS: dict[str, str] = {  # world → the function that runs one of its rows: RunSpec → row (a JSON-able dict)
     "sim": "fearguard.sim.suite:run_row",
     "duckietown": "fearguard.worlds.duckietown.suite:run_row",
+    "metadrive": "fearguard.worlds.metadrive.suite:run_row",
 }
 
 

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from fearguard.recorder import Recorder
+from fearguard.outputs.recorder import Recorder
 from fearguard.supervisor import FearGuard, Observation
 from fearguard.worlds.metadrive.metrics import Sample, rising_edges, stopped_car_outcome, summarize_drive, supervisor_times
 

@@ -16,7 +16,8 @@ import pytest
 
 pytest.importorskip("metadrive", reason="MetaDrive is not installed (bash .ci/metadrive.sh)")
 
-from fearguard.worlds.metadrive.drive import DriveOptions, drive
+from fearguard.drive.world import Decision, Sensed
+from fearguard.worlds.metadrive.drive import DriveOptions, Expert, drive
 from fearguard.worlds.metadrive.world import MetaDriveWorld, Scenario, Truth
 
 
@@ -34,9 +35,12 @@ def test_the_frame_is_a_road_whose_yellow_line_lies_where_the_camera_model_puts_
     """The camera model (60° horizontal FOV, 2.095 m up, pitched 0.6° up) projects the lane's left boundary — the
     yellow centre line, half a lane width left of the ego — onto the yellow paint MetaDrive rendered, row by row.
     The truth at the start is sane too (one world for both: a reset costs 10-25 s)."""
-    obs, image, truth = world.sense()
+    sensed = world.sense()
+    assert isinstance(sensed, Sensed) and sensed.index == 0 and sensed.t_s == 0.0
+    image, truth = sensed.image, world.truth()
     _truth_at_the_start_is_sane(world)
-    assert image.shape == (240, 320, 3) and image.dtype == np.uint8 and obs.frame is image
+    assert image is not None and image.shape == (240, 320, 3) and image.dtype == np.uint8 and sensed.observation.frame is image
+    assert sensed.observation.ultrasonic_range_m is None  # no radar unless asked
     hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)
     sky, road = image[:40].reshape(-1, 3).mean(axis=0), hsv[200:, 100:220].reshape(-1, 3)
     assert sky[0] > sky[2]  # blue above
@@ -63,15 +67,21 @@ def _truth_at_the_start_is_sane(world: MetaDriveWorld) -> None:
     assert world.fps == pytest.approx(10.0) and not world.done
 
 
+def _drive(w: MetaDriveWorld, steps: int, decision: Decision) -> None:
+    """``steps`` steps of the World protocol with one decision (what drive.loop.run does, without a recorder)."""
+    for _ in range(steps):
+        sensed = w.sense()
+        assert sensed is not None
+        w.act(sensed, decision)
+
+
 @pytest.mark.parametrize("bearing_deg", [8.0, -8.0])
 def test_a_left_command_turns_left_and_a_right_one_right(bearing_deg: float) -> None:
     w = MetaDriveWorld(Scenario(seed=1, traffic_density=0.0, render=False))
     try:
-        for _ in range(20):  # 2 s to speed, straight
-            w.act(0.0, 8.0)
+        _drive(w, 20, Decision(0.0, 8.0))  # 2 s to speed, straight
         before = w.truth()
-        for _ in range(10):  # 1 s on the command
-            w.act(bearing_deg, 8.0)
+        _drive(w, 10, Decision(bearing_deg, 8.0))  # 1 s on the command
         after = w.truth()
     finally:
         w.close()
@@ -82,18 +92,21 @@ def test_a_left_command_turns_left_and_a_right_one_right(bearing_deg: float) -> 
 
 def test_the_same_seed_gives_the_same_drive() -> None:
     def run() -> list[tuple[float, ...]]:
-        w = MetaDriveWorld(Scenario(seed=2, traffic_density=0.1, render=False))
+        w = MetaDriveWorld(Scenario(seed=2, traffic_density=0.1, render=False), seconds=3.0)
+        expert = Expert(w, 10.0)
         try:
             out = []
-            for _ in range(30):
-                w.act_expert(10.0)
+            while (sensed := w.sense()) is not None:  # the World protocol: None once the 3 s are driven
+                assert sensed.image is None  # no camera for the expert
+                w.act(sensed, expert.decide(sensed))
                 t = w.truth()
                 out.append((t.x_m, t.y_m, t.speed_mps, t.gap_m, t.route_m))
             return out
         finally:
             w.close()
 
-    assert run() == run()
+    first = run()
+    assert len(first) == 30 and first[-1][2] > 3.0 and first == run()
 
 
 def test_a_short_guarded_drive_moves_forward_and_writes_its_log(tmp_path: Path) -> None:
@@ -108,3 +121,4 @@ def test_a_short_guarded_drive_moves_forward_and_writes_its_log(tmp_path: Path) 
     assert json.loads((tmp_path / "summary.json").read_text())["controller"] == "guarded"
     assert (tmp_path / "timeline.png").stat().st_size > 0
     assert s["timing"]["controller_ms_median"] > 0 and s["timing"]["simulator_ms_median"] > 0
+    assert [line["frame"] for line in lines] == list(range(20))  # the one loop's record: one line per step, in order

@@ -30,7 +30,7 @@ import io
 import logging
 from typing import Any
 
-from fearguard.errors import FearguardError
+from fearguard.errors import SimulatorMissing  # defined in errors.py, importable here
 
 MAP_REGION_M = 512  # [m] side of the painted terrain region (a power of two, MetaDrive's rule)
 PIXELS_PER_M = 11  # [px/m] of the semantic map that paints road and lines (MetaDrive: 22); lines stay >= 1 px wide
@@ -48,10 +48,6 @@ ENGINE_SETTINGS: dict[str, Any] = {
     "show_coordinates": False,
     "log_level": logging.ERROR,
 }
-
-
-class SimulatorMissing(FearguardError):
-    """MetaDrive is not installed (or not importable) in this Python environment."""
 
 
 _PATCHED = False

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from fearguard.recorder import CommandStats
+from fearguard.outputs.recorder import CommandStats
 from fearguard.worlds.duckietown.metrics import rising_edges
 
 STOPPED_SPEED_MPS = 0.3  # [m/s] at or below this the car counts as standing (the road-car rules' standstill_mps)

@@ -43,7 +43,17 @@ def print_drive(summary: Mapping[str, Any]) -> None:
 
 
 SUITE_COLUMNS = ("run", "seed", "controller", "progress m", "% of expert", "route %", "out of road", "crashes", "min gap m",
-                 "min TTC s", "EMERGENCY s", "offset RMS m", "fearguard ms", "simulator ms")
+                 "min TTC s", "EMERGENCY s", "offset RMS m", "stopped car", "fearguard ms", "simulator ms")
+
+
+def _stopped_car_cell(car: Mapping[str, Any] | None) -> str:
+    """What happened at the stopped car: contact, or stopped how far short, then passed or waited."""
+    if not car:
+        return "–"
+    if car.get("contact"):
+        return "contact"
+    what = f"stopped {_f(car.get('stop_gap_m'), '.1f')} m short" if car.get("stopped_behind") else "did not stop"
+    return what + (", passed" if car.get("passed") else ", waited" if car.get("waited_behind") else "")
 
 
 def suite_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
@@ -54,6 +64,6 @@ def suite_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
                  _f(100 * r["route_completion"] if r.get("route_completion") is not None else None, ".0f"), str(r["out_of_road"]),
                  str(r["crashes"]), _f(r.get("min_gap_m"), ".1f"), _f(r.get("min_ttc_s"), ".1f"),
                  _f(r.get("emergency_s"), ".1f") if r["controller"] == "guarded" else "–", _f(r.get("lane_offset_rms_m")),
-                 _f(r.get("controller_ms"), ".1f"), _f(r.get("simulator_ms"), ".0f")]
+                 _stopped_car_cell(r.get("stopped_car")), _f(r.get("controller_ms"), ".1f"), _f(r.get("simulator_ms"), ".0f")]
         out.append("| " + " | ".join(cells) + " |")
     return "\n".join(out) + "\n"

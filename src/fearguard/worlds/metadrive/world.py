@@ -1,8 +1,11 @@
 """MetaDrive as a world for fearguard: the ego car's camera, its ground truth, traffic, light, a lead and a radar.
 
-The world the one-loop refactor (issue 32) drives: ``fps``, ``camera``, ``sense() -> (Observation, image_bgr,
-truth)``, ``act(steering_deg, speed_mps)``, ``done``, ``close()``. MetaDrive is imported lazily (``headless.py``
-applies every setting that makes it render on Mesa), so fearguard's core never needs it.
+``MetaDriveWorld`` is a ``World`` of the one driver loop (``drive/world.py``): ``sense()`` gives the camera frame, the
+speed and (with a radar) the range as a ``Sensed``; ``act(sensed, decision)`` drives one 0.1 s step — the
+pure-pursuit arc to the controller's aim-point bearing at its speed (``preset.steering_action``), or the expert's own
+MetaDrive action (``Decision.action``) — and returns the log's fields of the truth after it; the truth of every step
+is kept (``samples``) for the metrics. MetaDrive is imported lazily (``headless.py`` applies every setting that makes
+it render on Mesa), so fearguard's core never needs it.
 
 Ground truth from MetaDrive's own objects: the ego's lane (``vehicle.lane``: lateral offset, + = left of the lane
 centre — MetaDrive's ``local_coordinates`` lateral is + to the right, measured by steering left in the simulator — and
@@ -18,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import io
 import math
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -25,9 +29,11 @@ from typing import Any
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.errors import FearguardError
+from fearguard.drive.world import Decision, Outcome, Sensed
+from fearguard.errors import FearguardError, MapError
 from fearguard.supervisor import Observation
 from fearguard.worlds.metadrive.headless import ENGINE_SETTINGS, MIN_CAMERA_PX, after_reset, simulator
+from fearguard.worlds.metadrive.metrics import Sample
 from fearguard.worlds.metadrive.preset import (
     CAR_LENGTH_M,
     CAR_WIDTH_M,
@@ -50,10 +56,6 @@ LEADS = ("slower", "stopped")
 RANGE_SENSORS = ("none", "radar")
 TEST_SEEDS = range(5000, 6000)  # the independent test set (../shared/TEST-SET.md): never developed on
 BLOCK_LETTERS = frozenset("SCrRXOTyY$PpB")  # MetaDrive's PG block IDs (pg_block ID of each block class)
-
-
-class MapError(FearguardError):
-    """A block string, lane count or placement MetaDrive cannot build."""
 
 
 @dataclass(frozen=True)
@@ -161,17 +163,23 @@ GAP_RANGE_M = 150.0  # [m] the truth looks this far ahead for the vehicle ahead 
 
 
 class MetaDriveWorld:
-    """One ego car in one MetaDrive scenario: ``sense`` its camera and truth, ``act`` on fearguard's command."""
+    """One ego car in one MetaDrive scenario, as a ``World``: ``sense`` its camera, ``act`` on a controller's decision.
+
+    ``seconds`` bounds the drive (``sense`` returns None after it); MetaDrive ending the episode (a crash, off the
+    road, arrived) ends it too (``Outcome.done``). ``samples`` holds the truth after every step, ``sim_ms`` the
+    simulator's time per step (physics + rendering), for the metrics and the cost table.
+    """
 
     fps: float = FRAME_RATE_HZ
 
-    def __init__(self, scenario: Scenario) -> None:
+    def __init__(self, scenario: Scenario, seconds: float = math.inf) -> None:
         simulator()
         from metadrive.envs.metadrive_env import MetaDriveEnv
 
         self.scenario = s = scenario
         self.camera: CameraModel = metadrive_camera(s.width_px, s.height_px)
         self.aim_m = lane_aim_m(self.camera)
+        self.total = math.ceil(seconds * FRAME_RATE_HZ) if math.isfinite(seconds) else None  # steps; None: until MetaDrive ends
         self.env = MetaDriveEnv(_config(s))
         try:
             with contextlib.redirect_stdout(io.StringIO()):
@@ -195,24 +203,49 @@ class MetaDriveWorld:
         if s.render:
             self._image = self._render()  # the first frame with the light, the shadows off and the lead
         self._expert: Any = None
+        self.start: Truth = self.truth()
+        self.samples: list[Sample] = []
+        self.sim_ms: list[float] = []
 
-    # -- the World interface -------------------------------------------------------------------------------------
+    # -- the World protocol --------------------------------------------------------------------------------------
     @property
     def done(self) -> bool:
+        """MetaDrive ended the episode (a crash, off the road, arrived)."""
         return self._ended
 
-    def sense(self) -> tuple[Observation, np.ndarray, Truth]:
-        """The camera frame (BGR uint8), the observation fearguard takes (frame, speed, radar range) and the truth."""
+    def sense(self) -> Sensed | None:
+        """The camera frame (BGR uint8; None without a camera), the speed and the radar range; None once the drive's
+        time is up or MetaDrive ended the episode."""
+        if self._ended or (self.total is not None and self._steps >= self.total):
+            return None
         truth = self.truth()
         radar = radar_range_m(truth.gap_m) if self.scenario.range_sensor == "radar" else None
-        obs = Observation(t_s=truth.t_s, speed_mps=truth.speed_mps, frame=self._image, ultrasonic_range_m=radar)
-        return obs, self._image, truth
+        frame = self._image if self.scenario.render else None
+        obs = Observation(t_s=truth.t_s, speed_mps=truth.speed_mps, frame=frame, ultrasonic_range_m=radar)
+        return Sensed(self._steps, truth.t_s, obs, frame)
 
-    def act(self, steering_deg: float, speed_mps: float) -> Action:
-        """Drive one step (0.1 s) on fearguard's aim-point bearing and speed target (``preset.steering_action``)."""
-        action = steering_action(steering_deg, speed_mps, float(self.ego.speed), self.aim_m)
+    def act(self, sensed: Sensed, decision: Decision) -> Outcome:
+        """One step (0.1 s): the expert's own action when it gave one, else the pure-pursuit arc to the decision's
+        aim-point bearing at its speed; the truth after it is kept and logged."""
+        if isinstance(decision.action, Action):
+            action = decision.action
+        else:
+            action = steering_action(decision.steering_deg, decision.speed_mps, float(self.ego.speed), self.aim_m)
+        began = time.perf_counter()
         self.step(action.as_list())
-        return action
+        self.sim_ms.append(1e3 * (time.perf_counter() - began))
+        t = self.truth()
+        self.samples.append(Sample(t.t_s, t.speed_mps, t.lane_offset_m, t.on_solid_line, t.out_of_road, t.crashed_vehicle,
+                                   t.crashed_object, t.crashed_other, t.progress_m, t.gap_m, t.ttc_s))
+        fields = dict(
+            speed_target_mps=decision.speed_mps, applied_steering_deg=decision.steering_deg, steer=action.steer,
+            throttle=action.throttle, speed_mps=t.speed_mps, progress_m=t.progress_m, route_completion=t.route_completion,
+            lane_offset_m=t.lane_offset_m, heading_error_deg=t.heading_error_deg, lane_index=t.lane_index, x_m=t.x_m, y_m=t.y_m,
+            out_of_road=t.out_of_road, on_solid_line=t.on_solid_line, crashed_vehicle=t.crashed_vehicle,
+            crashed_object=t.crashed_object, gap_m=t.gap_m, lead_speed_mps=t.lead_speed_mps, ttc_s=t.ttc_s,
+            radar_m=sensed.observation.ultrasonic_range_m,
+        )
+        return Outcome(fields, f"v {t.speed_mps:.1f} m/s", t.speed_mps, self._ended)
 
     def close(self) -> None:
         with contextlib.suppress(Exception):  # closing a headless GL context can fail harmlessly at exit
@@ -234,12 +267,12 @@ class MetaDriveWorld:
             self._ended = True
             self._end_info = dict(info)
 
-    def act_expert(self, cruise_mps: float) -> Action:
-        """Drive one step on MetaDrive's own IDM policy (lane keeping, car following, lane changes) at ``cruise_mps``."""
+    def expert_action(self, cruise_mps: float) -> Action:
+        """MetaDrive's own IDM policy (lane keeping on the map's lanes, car following, lane changes) at ``cruise_mps``:
+        the action it takes now (``act`` applies it)."""
         if self._expert is None:
             self._expert = _idm_policy(self.ego, self.scenario.seed, cruise_mps, lane_change=True)
         steer, throttle = (float(x) for x in self._expert.act())
-        self.step([steer, throttle])
         return Action(steer, throttle, steer * MAX_STEERING_DEG, cruise_mps)
 
     @property

@@ -1,0 +1,162 @@
+"""The MetaDrive suite: development seeds guarded / unguarded / expert by day, a stopped car in the lane, night.
+
+A plan of rows (``drive/plan.py``) run by the one suite (``drive/suite.py``: runs.jsonl grows a row per drive, an
+interrupted suite resumes); ``merge`` compares each drive with the expert's on the same run and checks issue 38's
+Done-when criteria:
+- day, a straight-and-curves map (SCSC), 3 lanes, light traffic (0.05), guarded: 0 crashes, 0 out of road,
+  progress ≥ 90 % of MetaDrive's expert (its IDM policy) on the same seed;
+- a stopped car in the ego's lane: no contact, stopped for, then passed or waited behind;
+- night: no crash, progress ≥ 60 % of the expert's.
+Seeds 5000-5999 are the independent test set (../shared/TEST-SET.md): the development seeds are others (a judge may
+run the suite on them: nothing refuses them).
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, fields, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from fearguard.drive.interrupt import StopSignal
+from fearguard.drive.plan import RunSpec
+from fearguard.drive.suite import process_pool, run_plan
+from fearguard.outputs.report import json_value
+from fearguard.worlds.metadrive.drive import DriveOptions, drive
+from fearguard.worlds.metadrive.report import suite_markdown
+
+DEV_SEEDS = tuple(range(10))  # development seeds (the test set is 5000-5999)
+DAY_PROGRESS_SHARE = 0.9  # [-] of the expert's progress, guarded by day
+NIGHT_PROGRESS_SHARE = 0.6  # [-] likewise at night
+CONTROLLERS = ("expert", "guarded", "unguarded")  # experts first: the other rows are compared with them
+
+
+def plan(seeds: Sequence[int] = DEV_SEEDS[:3], seconds: float = 30.0, stopped_seeds: Sequence[int] = (0,),
+         night_seeds: Sequence[int] = (0,), out_dir: str | Path | None = None, base: DriveOptions | None = None) -> list[RunSpec]:
+    """Every drive of the suite as rows: per day seed expert / guarded / unguarded; per stopped-car seed guarded and
+    expert; per night seed expert and guarded. ``base``: the day drive (default SCSC, 3 lanes, traffic 0.05)."""
+    day = replace(base or DriveOptions(), seconds=seconds, plots=True)
+    runs: list[tuple[str, DriveOptions]] = []
+    for seed in seeds:
+        runs += [(f"day {seed}", replace(day, seed=seed, controller=c)) for c in CONTROLLERS]
+    for seed in stopped_seeds:
+        runs += [(f"stopped car {seed}", replace(day, seed=seed, controller=c, lead="stopped")) for c in ("expert", "guarded")]
+    for seed in night_seeds:
+        runs += [(f"night {seed}", replace(day, seed=seed, controller=c, lighting="night")) for c in ("expert", "guarded")]
+    root = Path(out_dir) if out_dir is not None else None
+    return [RunSpec("metadrive", name, o.controller, o.seed,
+                    {**asdict(o), "folder": str(root / f"{name.replace(' ', '_')}_{o.controller}") if root else None})
+            for name, o in runs]
+
+
+def options_of(spec: RunSpec) -> DriveOptions:
+    """The DriveOptions a row names."""
+    known = {f.name for f in fields(DriveOptions)}
+    return DriveOptions(**{k: v for k, v in spec.options.items() if k in known})
+
+
+def run_row(spec: RunSpec, stop: StopSignal | None = None) -> dict[str, Any]:
+    """One drive of the suite (its folder written when the plan names one): the raw row; ``merge`` compares it with the
+    expert's. A stop signal ends the drive after its step (the row says ``interrupted``: not a result)."""
+    options = options_of(spec)
+    result = drive(options, spec.options.get("folder"), stop=stop)
+    return {**raw_row(spec.name, options, result.summary), "interrupted": result.interrupted}
+
+
+def raw_row(name: str, options: DriveOptions, s: dict[str, Any]) -> dict[str, Any]:
+    """A drive's row before it is compared with the expert's (``merge`` adds ``progress_vs_expert_pct``)."""
+    timing = s.get("timing", {})
+    return {
+        "run": name, "controller": options.controller, "seed": options.seed, "map": options.map_blocks, "lighting": options.lighting,
+        "lead": options.lead, "traffic_density": options.traffic_density, "seconds": options.seconds,
+        "progress_m": s["progress_m"], "progress_vs_expert_pct": None, "route_completion": s.get("route_completion"),
+        "out_of_road": s["out_of_road"], "crashes": s["crashes"], "crashes_by_kind": s.get("crashes_by_kind"),
+        "end_reason": s.get("end_reason"), "min_gap_m": s.get("min_gap_m"), "min_ttc_s": s.get("min_ttc_s"),
+        "emergency_s": (s.get("time_in_mode_s") or {}).get("EMERGENCY"), "time_in_mode_s": s.get("time_in_mode_s"),
+        "lane_offset_rms_m": s.get("lane_offset_rms_m"), "mean_speed_mps": s.get("mean_speed_mps"),
+        "stopped_car": s.get("stopped_car"), "controller_ms": timing.get("controller_ms_median"),
+        "simulator_ms": timing.get("simulator_ms_median"),
+    }
+
+
+def criteria(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Issue 38's Done-when criteria over the guarded rows, each with ok and the numbers behind it."""
+    out = []
+    for r in rows:
+        if r["controller"] != "guarded":
+            continue
+        share = (r["progress_vs_expert_pct"] or 0.0) / 100
+        if r["lead"] == "stopped":
+            car = r["stopped_car"] or {}
+            went = bool(car.get("passed") or car.get("waited_behind"))
+            ok = not car.get("contact") and r["crashes"] == 0 and bool(car.get("stopped_behind")) and went
+            out.append({"criterion": f"{r['run']}: stopped for (no crash), then passed or waited behind", "ok": ok,
+                        "detail": f"contact {car.get('contact')}, stopped behind {car.get('stopped_behind')} "
+                                  f"(gap {car.get('stop_gap_m')}), passed {car.get('passed')}, waited {car.get('waited_behind')}"})
+            continue
+        need = NIGHT_PROGRESS_SHARE if r["lighting"] == "night" else DAY_PROGRESS_SHARE
+        ok = r["crashes"] == 0 and (r["lighting"] == "night" or r["out_of_road"] == 0) and share >= need
+        out.append({"criterion": f"{r['run']}: no crash" + ("" if r["lighting"] == "night" else ", never out of road")
+                                 + f", progress >= {100 * need:.0f} % of the expert's", "ok": ok,
+                    "detail": f"crashes {r['crashes']}, out of road {r['out_of_road']}, progress {100 * share:.0f} %"})
+    return out
+
+
+def cost_line(rows: Sequence[dict[str, Any]]) -> str:
+    """fearguard's per-step cost over every guarded drive (medians of the per-drive medians) against MetaDrive's step."""
+    g = [r["controller_ms"] for r in rows if r["controller"] == "guarded" and r["controller_ms"] is not None]
+    s = [r["simulator_ms"] for r in rows if r["controller"] == "guarded" and r["simulator_ms"] is not None]
+    if not g or not s:
+        return ""
+    gm, sm = float(np.median(g)), float(np.median(s))
+    return (f"fearguard per step (perception + supervisor): {gm:.1f} ms median over {len(g)} guarded drives; MetaDrive's step "
+            f"(physics + rendering at 320x240): {sm:.0f} ms; fearguard = {100 * gm / sm:.1f} % of a MetaDrive step")
+
+
+def merge(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]], str]:
+    """The rows compared with the expert's progress on the same run, the criteria, and the markdown (table, cost line,
+    PASS/FAIL per criterion)."""
+    experts = {r["run"]: r["progress_m"] for r in rows if r["controller"] == "expert"}
+    merged = []
+    for r in rows:
+        expert = experts.get(r["run"])
+        row = {k: v for k, v in r.items() if k not in ("spec", "interrupted")}
+        row["progress_vs_expert_pct"] = 100 * r["progress_m"] / expert if expert else None
+        merged.append(row)
+    checks = criteria(merged)
+    markdown = suite_markdown(merged) + "\n" + cost_line(merged) + "\n\n" + "\n".join(
+        f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"
+    return merged, checks, markdown
+
+
+def run_suite(out_dir: str | Path, specs: Sequence[RunSpec], jobs: int = 1, on_run: Callable[[str], None] | None = None,
+              resume: bool = False, stop: StopSignal | None = None) -> tuple[str, bool]:
+    """The plan through the one suite (``jobs`` drives at a time, each in its own process: one MetaDrive engine per
+    process); runs.jsonl grows a row per drive, suite.md / suite.json are rewritten after every drive. Returns the
+    markdown and whether the suite was cut short."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    order = {spec.key: i for i, spec in enumerate(specs)}
+    finished: list[dict[str, Any]] = []
+    markdown = ""
+
+    def write(rows: Sequence[dict[str, Any]]) -> None:
+        nonlocal markdown
+        merged, checks, markdown = merge(rows)
+        (out / "suite.md").write_text(markdown, encoding="utf-8")
+        (out / "suite.json").write_text(json.dumps(json_value({"rows": merged, "criteria": checks}), indent=2) + "\n", encoding="utf-8")
+
+    def said(row: dict[str, Any]) -> None:
+        finished.append(row)
+        write(sorted(finished, key=lambda r: order.get(RunSpec.from_json(r["spec"]).key, 0)))
+        if on_run is not None:
+            on_run(f"{row['run']} {row['controller']}: progress {row['progress_m']:.1f} m, out of road {row['out_of_road']}, "
+                   f"crashes {row['crashes']}, EMERGENCY {row['emergency_s'] or 0:.1f} s")
+
+    result = run_plan(specs, runs_log=out / "runs.jsonl", resume=resume, stop=stop,
+                      executor=process_pool(jobs) if jobs > 1 else None, on_row=said)
+    write(result.rows)
+    return markdown, result.interrupted
