@@ -30,7 +30,7 @@ def test_aim_point_is_on_the_road_the_camera_sees() -> None:
 
 def test_limits_are_the_road_car_where_metadrive_agrees() -> None:
     lim, road = p.metadrive_limits(), PRESETS["road_car"]
-    assert lim.max_speed_mps == pytest.approx(80 / 3.6) and lim.wheelbase_m == pytest.approx(2.469, abs=1e-3) and lim.width_m == 1.852
+    assert lim.max_speed_mps == pytest.approx(80 / 3.6) and lim.width_m == 1.852 and p.WHEELBASE_M == pytest.approx(2.469, abs=1e-3)
     assert not lim.has_ultrasonic and p.metadrive_limits(radar=True).has_ultrasonic
     for same in ("max_decel_mps2", "reaction_time_s", "stop_margin_m", "max_lateral_accel_mps2", "lead_max_decel_mps2"):
         assert getattr(lim, same) == getattr(road, same)
@@ -59,3 +59,14 @@ def test_speed_controller_brakes_to_stand_and_never_exceeds_full_pedal() -> None
     assert p.throttle_for(10.0, 0.0) == 1.0 and p.throttle_for(10.0, 20.0) == -1.0
     assert p.throttle_for(10.0, 9.0) == pytest.approx(p.ROLLING_THROTTLE + p.SPEED_GAIN)
     assert p.steering_action(0.0, -3.0, 2.0, 16.0).speed_target_mps == 0.0  # no reverse
+
+
+@pytest.mark.parametrize("bearing_deg", [1.0, 5.0, 10.0, -10.0])
+def test_the_limits_wheelbase_turns_the_aim_bearing_into_the_arc_the_car_drives(bearing_deg: float) -> None:
+    """The policy's bicycle model (κ = tan δ / L) with the preset's wheelbase gives the curvature of the pure-pursuit
+    arc the actuation drives for that bearing (within 2 % up to 10°), not a 4× tighter turn."""
+    aim = 16.0
+    wheel = p.pursuit_wheel_angle_deg(bearing_deg, aim)
+    driven = math.tan(math.radians(wheel)) / p.WHEELBASE_M
+    assumed = math.tan(math.radians(bearing_deg)) / p.metadrive_limits(aim_m=aim).wheelbase_m
+    assert assumed == pytest.approx(driven, rel=0.02)

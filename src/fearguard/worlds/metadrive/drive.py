@@ -116,7 +116,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None, on_step: Cal
     began = time.perf_counter()
     world = MetaDriveWorld(o.scenario(), seconds=o.seconds)
     open_s = time.perf_counter() - began
-    limits = metadrive_limits(radar=o.range_sensor == "radar")
+    limits = metadrive_limits(radar=o.range_sensor == "radar", aim_m=world.aim_m)
     lanes = HoughLaneSteering(camera=world.camera, fps=world.fps)
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
     guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=world.camera) if o.controller == "guarded" else None
