@@ -16,7 +16,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV="${1:-${METADRIVE_VENV:-.venv-metadrive}}"
 ASSETS="${METADRIVE_ASSETS:-../shared/metadrive/assets}"
-[ -d "$ASSETS" ] || ASSETS=/work/shared/metadrive/assets
 [ -f "$ASSETS/version.txt" ] || { echo "metadrive.sh: MetaDrive's asset tree is missing (looked in ../shared/metadrive/assets and $ASSETS); set METADRIVE_ASSETS" >&2; exit 2; }
 ASSETS="$(cd "$ASSETS" && pwd)"
 missing=""

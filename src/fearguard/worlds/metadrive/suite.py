@@ -13,7 +13,6 @@ run the suite on them: nothing refuses them).
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, fields, replace
 from pathlib import Path
@@ -23,8 +22,7 @@ import numpy as np
 
 from fearguard.drive.interrupt import StopSignal
 from fearguard.drive.plan import RunSpec
-from fearguard.drive.suite import process_pool, run_plan
-from fearguard.outputs.report import json_value
+from fearguard.drive.suite import compared_with_experts, process_pool, run_plan_with_tables
 from fearguard.worlds.metadrive.drive import DriveOptions, drive
 from fearguard.worlds.metadrive.report import suite_markdown
 
@@ -119,13 +117,7 @@ def cost_line(rows: Sequence[dict[str, Any]]) -> str:
 def merge(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]], str]:
     """The rows compared with the expert's progress on the same run, the criteria, and the markdown (table, cost line,
     PASS/FAIL per criterion)."""
-    experts = {r["run"]: r["progress_m"] for r in rows if r["controller"] == "expert"}
-    merged = []
-    for r in rows:
-        expert = experts.get(r["run"])
-        row = {k: v for k, v in r.items() if k not in ("spec", "interrupted")}
-        row["progress_vs_expert_pct"] = 100 * r["progress_m"] / expert if expert else None
-        merged.append(row)
+    merged = compared_with_experts(rows)
     checks = criteria(merged)
     markdown = suite_markdown(merged) + "\n" + cost_line(merged) + "\n\n" + "\n".join(
         f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"
@@ -137,26 +129,12 @@ def run_suite(out_dir: str | Path, specs: Sequence[RunSpec], jobs: int = 1, on_r
     """The plan through the one suite (``jobs`` drives at a time, each in its own process: one MetaDrive engine per
     process); runs.jsonl grows a row per drive, suite.md / suite.json are rewritten after every drive. Returns the
     markdown and whether the suite was cut short."""
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    order = {spec.key: i for i, spec in enumerate(specs)}
-    finished: list[dict[str, Any]] = []
-    markdown = ""
-
-    def write(rows: Sequence[dict[str, Any]]) -> None:
-        nonlocal markdown
-        merged, checks, markdown = merge(rows)
-        (out / "suite.md").write_text(markdown, encoding="utf-8")
-        (out / "suite.json").write_text(json.dumps(json_value({"rows": merged, "criteria": checks}), indent=2) + "\n", encoding="utf-8")
 
     def said(row: dict[str, Any]) -> None:
-        finished.append(row)
-        write(sorted(finished, key=lambda r: order.get(RunSpec.from_json(r["spec"]).key, 0)))
         if on_run is not None:
             on_run(f"{row['run']} {row['controller']}: progress {row['progress_m']:.1f} m, out of road {row['out_of_road']}, "
                    f"crashes {row['crashes']}, EMERGENCY {row['emergency_s'] or 0:.1f} s")
 
-    result = run_plan(specs, runs_log=out / "runs.jsonl", resume=resume, stop=stop,
-                      executor=process_pool(jobs) if jobs > 1 else None, on_row=said)
-    write(result.rows)
+    result, markdown = run_plan_with_tables(specs, Path(out_dir), merge, resume=resume, stop=stop,
+                                            executor=process_pool(jobs) if jobs > 1 else None, on_row=said)
     return markdown, result.interrupted
