@@ -482,7 +482,7 @@ def cmd_metadrive_suite(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else _new_out("metadrive-suite", f"{len(args.seeds)}seeds")
     try:
         base = DriveOptions(map_blocks=args.map, lanes=args.lanes, traffic_density=args.traffic, cruise_mps=args.cruise_mps)
-        specs = plan(args.seeds, args.seconds, args.stopped_seeds, args.night_seeds, out, base)
+        specs = plan(args.seeds, args.seconds, args.stopped_seeds, args.night_seeds, out, base, args.controllers)
     except ValueError as exc:
         raise FearguardError(f"metadrive-suite: {exc}") from None
     print(f"metadrive-suite: {len(specs)} drives → {out}", file=sys.stderr)
@@ -770,6 +770,8 @@ def build_parser() -> argparse.ArgumentParser:
     mds.add_argument("--stopped-seeds", type=_count(0), nargs="*", default=[0], help="seeds with a stopped car in the lane (default 0)")
     mds.add_argument("--night-seeds", type=_count(0), nargs="*", default=[0], help="seeds driven at night (default 0)")
     mds.add_argument("--seconds", type=_number(above=0.0), default=30.0, help="duration of each drive (default 30)")
+    mds.add_argument("--controllers", nargs="+", choices=("guarded", "unguarded"), default=["guarded", "unguarded"],
+                     help="the day drives besides the expert's (default: guarded unguarded)")
     mds.add_argument("--map", type=_blocks, default="SCSC", help="MetaDrive block string (default SCSC)")
     mds.add_argument("--lanes", type=_bounded_count(1, 6), default=3, help="lanes per direction (default 3)")
     mds.add_argument("--traffic", type=_number(0.0, below=1.000001), default=0.05, help="traffic density 0..1 (default 0.05)")

@@ -37,3 +37,15 @@ def test_without_the_simulator_the_error_says_how_to_install_it(capsys: pytest.C
     assert main(["metadrive", "--out", str(tmp_path / "run"), "--seconds", "1"]) == 2
     err = capsys.readouterr().err
     assert "bash .ci/metadrive.sh" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--seeds", "-1"], "argument --seeds: must be >= 0, got -1"),
+    (["--controllers", "expert"], "argument --controllers: invalid choice: 'expert'"),
+    (["--map", "SQ"], "argument --map: 'SQ' is not a MetaDrive block string"),
+    (["--jobs", "0"], "argument --jobs: must be >= 1, got 0"),
+])
+def test_the_suites_bad_options_are_usage_errors(args: list[str], message: str, capsys: pytest.CaptureFixture[str], tmp_path) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["metadrive-suite", "--out", str(tmp_path), *args])
+    assert exc.value.code == 2 and message in capsys.readouterr().err.strip().splitlines()[-1]

@@ -22,6 +22,8 @@ def test_plan_names_every_drive_once_with_the_experts_first(tmp_path: Path) -> N
     assert all(RunSpec.from_json(s.to_json()) == s for s in specs)  # a row survives JSON (runs.jsonl, another process)
     assert specs[0].options["folder"] == str(tmp_path / "day_0_expert")
     assert ROW_RUNNERS["metadrive"] == "fearguard.worlds.metadrive.suite:run_row"
+    only = plan([5], 30.0, (), (), controllers=("guarded",))
+    assert [(s.name, s.controller) for s in only] == [("day 5", "expert"), ("day 5", "guarded")]
 
 
 def _row(run: str, controller: str, progress_m: float, **kw: object) -> dict:

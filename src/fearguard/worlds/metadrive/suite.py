@@ -33,13 +33,15 @@ CONTROLLERS = ("expert", "guarded", "unguarded")  # experts first: the other row
 
 
 def plan(seeds: Sequence[int] = DEV_SEEDS[:3], seconds: float = 30.0, stopped_seeds: Sequence[int] = (0,),
-         night_seeds: Sequence[int] = (0,), out_dir: str | Path | None = None, base: DriveOptions | None = None) -> list[RunSpec]:
-    """Every drive of the suite as rows: per day seed expert / guarded / unguarded; per stopped-car seed guarded and
-    expert; per night seed expert and guarded. ``base``: the day drive (default SCSC, 3 lanes, traffic 0.05)."""
+         night_seeds: Sequence[int] = (0,), out_dir: str | Path | None = None, base: DriveOptions | None = None,
+         controllers: Sequence[str] = CONTROLLERS) -> list[RunSpec]:
+    """Every drive of the suite as rows: per day seed ``controllers`` (default expert / guarded / unguarded; the
+    expert always, first); per stopped-car seed expert and guarded; per night seed expert and guarded. ``base``: the
+    day drive (default SCSC, 3 lanes, traffic 0.05)."""
     day = replace(base or DriveOptions(), seconds=seconds, plots=True)
     runs: list[tuple[str, DriveOptions]] = []
     for seed in seeds:
-        runs += [(f"day {seed}", replace(day, seed=seed, controller=c)) for c in CONTROLLERS]
+        runs += [(f"day {seed}", replace(day, seed=seed, controller=c)) for c in CONTROLLERS if c == "expert" or c in controllers]
     for seed in stopped_seeds:
         runs += [(f"stopped car {seed}", replace(day, seed=seed, controller=c, lead="stopped")) for c in ("expert", "guarded")]
     for seed in night_seeds:
