@@ -37,6 +37,12 @@ def test_summary_counts_crashes_by_kind_and_the_smallest_gap() -> None:
 
 
 
+def test_the_wrong_side_counts_each_crossing_and_its_time() -> None:
+    """Over the centre line is road to MetaDrive (not out of road): counted on its own, each crossing once."""
+    s = summarize_drive(_samples(10, over_centre_line=lambda k: k in (2, 3, 7)), DT, 100.0)
+    assert s["centre_line_crossings"] == 2 and s["over_centre_line_s"] == pytest.approx(0.3) and s["out_of_road"] == 0
+
+
 def test_out_of_road_counts_each_departure_once() -> None:
     s = summarize_drive(_samples(6, out_of_road=lambda k: k in (2, 3, 5)), DT)
     assert s["out_of_road"] == 2 and s["route_completion"] is None

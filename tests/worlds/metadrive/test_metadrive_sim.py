@@ -62,7 +62,7 @@ def _truth_at_the_start_is_sane(world: MetaDriveWorld) -> None:
     assert isinstance(t, Truth) and t.t_s == 0.0 and t.speed_mps < 0.5
     assert abs(t.lane_offset_m) < 0.05 and abs(t.heading_error_deg) < 1.0 and t.lane_index == 0
     assert t.lane_width_m == pytest.approx(3.5) and t.route_m > 200.0 and 0.0 <= t.route_completion < 0.05
-    assert not (t.out_of_road or t.crashed or t.on_solid_line or t.arrived)
+    assert not (t.out_of_road or t.crashed or t.on_solid_line or t.over_centre_line or t.arrived)
     assert math.isinf(t.gap_m) and math.isinf(t.ttc_s)  # no traffic
     assert world.fps == pytest.approx(10.0) and not world.done
 

@@ -29,6 +29,7 @@ def test_plan_names_every_drive_once_with_the_experts_first(tmp_path: Path) -> N
 def _row(run: str, controller: str, progress_m: float, **kw: object) -> dict:
     row = {"run": run, "controller": controller, "seed": 0, "map": "SCSC", "lighting": "day", "lead": None, "traffic_density": 0.05,
            "seconds": 30.0, "progress_m": progress_m, "progress_vs_expert_pct": None, "route_completion": 0.5, "out_of_road": 0,
+           "centre_line_crossings": 0,
            "crashes": 0, "crashes_by_kind": None, "end_reason": None, "min_gap_m": None, "min_ttc_s": None, "emergency_s": 0.0,
            "time_in_mode_s": None, "lane_offset_rms_m": 0.2, "mean_speed_mps": 9.0, "stopped_car": None, "controller_ms": 6.0,
            "simulator_ms": 500.0}
@@ -41,11 +42,12 @@ def test_merge_compares_with_the_expert_and_checks_issue_38s_criteria() -> None:
     rows = [_row("day 0", "expert", 280.0), _row("day 0", "guarded", 266.0), _row("day 0", "unguarded", 290.0, out_of_road=1),
             _row("day 1", "expert", 280.0), _row("day 1", "guarded", 240.0),  # 86 % < 90 %
             _row("day 2", "expert", 280.0), _row("day 2", "guarded", 275.0, crashes=1),
+            _row("day 3", "expert", 280.0), _row("day 3", "guarded", 275.0, centre_line_crossings=1),  # on the wrong side
             _row("stopped car 0", "expert", 250.0, lead="stopped"), _row("stopped car 0", "guarded", 60.0, lead="stopped", stopped_car=car),
             _row("night 0", "expert", 280.0, lighting="night"), _row("night 0", "guarded", 180.0, lighting="night")]  # 64 % >= 60 %
     merged, checks, markdown = merge(rows)
     assert merged[1]["progress_vs_expert_pct"] == 95.0 and "spec" not in merged[1]
-    assert [c["ok"] for c in checks] == [True, False, False, True, True]
+    assert [c["ok"] for c in checks] == [True, False, False, False, True, True]
     assert "PASS day 0" in markdown and "FAIL day 1" in markdown and "stopped 8.0 m short, waited" in markdown
     assert "fearguard = 1.2 % of a MetaDrive step" in markdown
     assert criteria([_row("stopped car 1", "guarded", 50.0, lead="stopped", stopped_car={**car, "contact": True})])[0]["ok"] is False

@@ -3,7 +3,8 @@
 - progress: the route driven (MetaDrive's ``travelled_length``), and route completion (its share of the route);
 - lane offset from the lane centre (RMS, max; + = left), share of time with a wheel over a solid line;
 - out of road (MetaDrive: off every lane of the road, or on the sidewalk: the episode ends) and crashes by kind
-  (vehicle, object, other), counted on rising edges;
+  (vehicle, object, other), counted on rising edges; centre-line crossings (the car's centre beyond the yellow line,
+  in the oncoming lanes: MetaDrive counts those as road, so "out of road" alone misses a car on the wrong side);
 - the vehicle or object ahead in the ego's path: smallest bumper-to-bumper gap and smallest time to collision;
 Every step lasts the simulator's step (0.1 s). What the supervisor did (modes, EMERGENCY episodes, fear) comes from
 the run's Recorder (``recorder.CommandStats``), its one owner: ``supervisor_times`` turns its shares into seconds.
@@ -40,6 +41,7 @@ class Sample:
     progress_m: float
     gap_m: float = math.inf
     ttc_s: float = math.inf
+    over_centre_line: bool = False  # the car's centre beyond the yellow line: in the oncoming lanes
 
 
 def _finite_min(values: Sequence[float]) -> float | None:
@@ -64,6 +66,8 @@ def summarize_drive(samples: Sequence[Sample], dt_s: float, route_m: float | Non
         "lane_offset_max_m": float(np.nanmax(offset)) if seen else None,
         "solid_line_share": float(np.mean([s.on_solid_line for s in samples])),
         "out_of_road": rising_edges([s.out_of_road for s in samples]), "crashes": sum(crashes.values()), "crashes_by_kind": crashes,
+        "centre_line_crossings": rising_edges([s.over_centre_line for s in samples]),
+        "over_centre_line_s": float(np.count_nonzero([s.over_centre_line for s in samples]) * dt_s),
         "min_gap_m": _finite_min([s.gap_m for s in samples]), "min_ttc_s": _finite_min([s.ttc_s for s in samples]),
         "time_stopped_s": float(np.count_nonzero(speeds <= STOPPED_SPEED_MPS) * dt_s),
     }

@@ -19,7 +19,8 @@ def drive_lines(s: Mapping[str, Any]) -> list[str]:
                  f"{s.get('duration_s', 0):.1f} s, {s.get('progress_m', 0):.1f} m ({route}), mean {_f(s.get('mean_speed_mps'), '.1f')} m/s"
                  + (f"; MetaDrive ended it: {s['end_reason']}" if s.get("end_reason") else ""),
         "lane": f"offset RMS {_f(s.get('lane_offset_rms_m'))} m, max {_f(s.get('lane_offset_max_m'))} m; "
-                f"on a solid line {100 * (s.get('solid_line_share') or 0):.0f} % of the time; out of road {s.get('out_of_road')}",
+                f"on a solid line {100 * (s.get('solid_line_share') or 0):.0f} % of the time; out of road {s.get('out_of_road')}; "
+                f"over the centre line {s.get('centre_line_crossings')} times, {_f(s.get('over_centre_line_s'), '.1f')} s",
         "crashes": f"{s.get('crashes')} (" + ", ".join(f"{kind} {n}" for kind, n in crashes.items()) + ")",
         "ahead": f"min gap {_f(s.get('min_gap_m'), '.1f')} m, min TTC {_f(s.get('min_ttc_s'), '.1f')} s",
     }
@@ -42,7 +43,8 @@ def print_drive(summary: Mapping[str, Any]) -> None:
     print("\n".join(drive_lines(summary)))
 
 
-SUITE_COLUMNS = ("run", "seed", "controller", "progress m", "% of expert", "route %", "out of road", "crashes", "min gap m",
+SUITE_COLUMNS = ("run", "seed", "controller", "progress m", "% of expert", "route %", "out of road", "over centre line",
+                 "crashes", "min gap m",
                  "min TTC s", "EMERGENCY s", "offset RMS m", "stopped car", "fearguard ms", "simulator ms")
 
 
@@ -62,6 +64,7 @@ def suite_markdown(rows: Sequence[Mapping[str, Any]]) -> str:
     for r in rows:
         cells = [r["run"], str(r["seed"]), r["controller"], _f(r["progress_m"], ".1f"), _f(r.get("progress_vs_expert_pct"), ".0f"),
                  _f(100 * r["route_completion"] if r.get("route_completion") is not None else None, ".0f"), str(r["out_of_road"]),
+                 _f(r.get("centre_line_crossings"), "d"),
                  str(r["crashes"]), _f(r.get("min_gap_m"), ".1f"), _f(r.get("min_ttc_s"), ".1f"),
                  _f(r.get("emergency_s"), ".1f") if r["controller"] == "guarded" else "–", _f(r.get("lane_offset_rms_m")),
                  _stopped_car_cell(r.get("stopped_car")), _f(r.get("controller_ms"), ".1f"), _f(r.get("simulator_ms"), ".0f")]

@@ -73,7 +73,8 @@ def raw_row(name: str, options: DriveOptions, s: dict[str, Any]) -> dict[str, An
         "run": name, "controller": options.controller, "seed": options.seed, "map": options.map_blocks, "lighting": options.lighting,
         "lead": options.lead, "traffic_density": options.traffic_density, "seconds": options.seconds,
         "progress_m": s["progress_m"], "progress_vs_expert_pct": None, "route_completion": s.get("route_completion"),
-        "out_of_road": s["out_of_road"], "crashes": s["crashes"], "crashes_by_kind": s.get("crashes_by_kind"),
+        "out_of_road": s["out_of_road"], "centre_line_crossings": s.get("centre_line_crossings"),
+        "crashes": s["crashes"], "crashes_by_kind": s.get("crashes_by_kind"),
         "end_reason": s.get("end_reason"), "min_gap_m": s.get("min_gap_m"), "min_ttc_s": s.get("min_ttc_s"),
         "emergency_s": (s.get("time_in_mode_s") or {}).get("EMERGENCY"), "time_in_mode_s": s.get("time_in_mode_s"),
         "lane_offset_rms_m": s.get("lane_offset_rms_m"), "mean_speed_mps": s.get("mean_speed_mps"),
@@ -98,10 +99,13 @@ def criteria(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                                   f"(gap {car.get('stop_gap_m')}), passed {car.get('passed')}, waited {car.get('waited_behind')}"})
             continue
         need = NIGHT_PROGRESS_SHARE if r["lighting"] == "night" else DAY_PROGRESS_SHARE
-        ok = r["crashes"] == 0 and (r["lighting"] == "night" or r["out_of_road"] == 0) and share >= need
-        out.append({"criterion": f"{r['run']}: no crash" + ("" if r["lighting"] == "night" else ", never out of road")
+        stayed = r["out_of_road"] == 0 and not r.get("centre_line_crossings")
+        ok = r["crashes"] == 0 and (r["lighting"] == "night" or stayed) and share >= need
+        lane = "" if r["lighting"] == "night" else ", never out of road nor over the centre line"
+        out.append({"criterion": f"{r['run']}: no crash{lane}"
                                  + f", progress >= {100 * need:.0f} % of the expert's", "ok": ok,
-                    "detail": f"crashes {r['crashes']}, out of road {r['out_of_road']}, progress {100 * share:.0f} %"})
+                    "detail": f"crashes {r['crashes']}, out of road {r['out_of_road']}, centre-line crossings "
+                              f"{r.get('centre_line_crossings')}, progress {100 * share:.0f} %"})
     return out
 
 

@@ -143,6 +143,7 @@ class Truth:
     lane_width_m: float
     out_of_road: bool  # MetaDrive: not on a lane of the road, or on the sidewalk
     on_solid_line: bool  # a wheel over a solid (continuous) line: the road edge or the yellow centre line
+    over_centre_line: bool  # the car's centre beyond the yellow centre line (left of lane 0): in the oncoming lanes
     crashed_vehicle: bool
     crashed_object: bool  # cones, barriers, warning triangles, broken-down... MetaDrive's "object"
     crashed_other: bool  # a building, a pedestrian
@@ -236,12 +237,13 @@ class MetaDriveWorld:
         self.sim_ms.append(1e3 * (time.perf_counter() - began))
         t = self.truth()
         self.samples.append(Sample(t.t_s, t.speed_mps, t.lane_offset_m, t.on_solid_line, t.out_of_road, t.crashed_vehicle,
-                                   t.crashed_object, t.crashed_other, t.progress_m, t.gap_m, t.ttc_s))
+                                   t.crashed_object, t.crashed_other, t.progress_m, t.gap_m, t.ttc_s, t.over_centre_line))
         fields = dict(
             speed_target_mps=decision.speed_mps, applied_steering_deg=decision.steering_deg, steer=action.steer,
             throttle=action.throttle, speed_mps=t.speed_mps, progress_m=t.progress_m, route_completion=t.route_completion,
             lane_offset_m=t.lane_offset_m, heading_error_deg=t.heading_error_deg, lane_index=t.lane_index, x_m=t.x_m, y_m=t.y_m,
-            out_of_road=t.out_of_road, on_solid_line=t.on_solid_line, crashed_vehicle=t.crashed_vehicle,
+            out_of_road=t.out_of_road, on_solid_line=t.on_solid_line, over_centre_line=t.over_centre_line,
+            crashed_vehicle=t.crashed_vehicle,
             crashed_object=t.crashed_object, gap_m=t.gap_m, lead_speed_mps=t.lead_speed_mps, ttc_s=t.ttc_s,
             radar_m=sensed.observation.ultrasonic_range_m,
         )
@@ -305,6 +307,7 @@ class MetaDriveWorld:
             speed_mps=speed, lane_offset_m=-float(lat), heading_error_deg=math.degrees(_wrap(float(v.heading_theta) - lane_heading)),
             lane_index=int(v.lane_index[-1]), lane_width_m=float(lane.width), out_of_road=bool((not v.on_lane) or v.crash_sidewalk),
             on_solid_line=bool(v.on_yellow_continuous_line or v.on_white_continuous_line),
+            over_centre_line=int(v.lane_index[-1]) == 0 and -float(lat) > 0.5 * float(lane.width),
             crashed_vehicle=bool(v.crash_vehicle), crashed_object=bool(v.crash_object),
             crashed_other=bool(v.crash_building or v.crash_human), progress_m=travelled, route_m=route,
             route_completion=min(1.0, max(0.0, travelled / route)) if route > 0 else math.nan,
