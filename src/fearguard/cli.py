@@ -753,7 +753,8 @@ def build_parser() -> argparse.ArgumentParser:
     md.add_argument("--range", choices=("none", "radar"), default="none",
                     help="forward range sensor: none (camera only) or a 0.3-80 m radar from the simulator's truth")
     md.add_argument("--lead", choices=("slower", "stopped"), default=None, help="add a car in the ego's lane ahead")
-    md.add_argument("--lead-ahead", type=_number(above=0.0), default=60.0, help="its distance ahead, bumper to bumper (m, default 60)")
+    md.add_argument("--lead-ahead", type=_number(above=0.0), default=35.0,
+                    help="its distance ahead, bumper to bumper (m, default 35: on the first block, the lanes MetaDrive knows at the start)")
     md.add_argument("--lead-speed", type=_number(above=0.0), default=5.0, help="the slower lead's speed (m/s, default 5)")
     md.add_argument("--width", type=_count(160), default=320, help="camera width in pixels, 4:3 (default 320)")
     md.add_argument("--rules", default=None, help="rule file (default: the bundled rules/road_car.toml)")

@@ -53,7 +53,7 @@ class DriveOptions:
     cruise_mps: float = CRUISE_MPS
     range_sensor: str = "none"
     lead: str | None = None
-    lead_ahead_m: float = 60.0
+    lead_ahead_m: float = 35.0
     lead_speed_mps: float = 5.0
     width_px: int = 320
     height_px: int = 240

@@ -94,7 +94,7 @@ class Scenario:
     width_px: int = 320
     height_px: int = 240
     lead: str | None = None  # "slower": a car ahead driving lead_speed_mps; "stopped": a broken-down car
-    lead_ahead_m: float = 60.0  # [m] from the ego's front bumper to the lead's rear, along the ego's lane
+    lead_ahead_m: float = 35.0  # [m] from the ego's front bumper to the lead's rear, along the ego's lane (the first block: ≤ ~40 m)
     lead_speed_mps: float = 5.0  # [m/s] the slower lead's cruise
     range_sensor: str = "none"
     render: bool = True  # False: no camera (a controller that only reads the truth); frames are black
