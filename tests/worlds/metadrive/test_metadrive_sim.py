@@ -122,3 +122,17 @@ def test_a_short_guarded_drive_moves_forward_and_writes_its_log(tmp_path: Path) 
     assert (tmp_path / "timeline.png").stat().st_size > 0
     assert s["timing"]["controller_ms_median"] > 0 and s["timing"]["simulator_ms_median"] > 0
     assert [line["frame"] for line in lines] == list(range(20))  # the one loop's record: one line per step, in order
+
+
+def test_a_stopped_car_stands_in_the_lane_where_it_was_asked_for() -> None:
+    """The broken-down car 35 m ahead in the ego's lane: the truth's gap is 35 m, it stays put while the ego closes in."""
+    w = MetaDriveWorld(Scenario(seed=0, traffic_density=0.0, render=False, lead="stopped", lead_ahead_m=35.0))
+    try:
+        start = w.truth()
+        _drive(w, 20, Decision(0.0, 5.0))
+        after = w.truth()
+    finally:
+        w.close()
+    assert start.gap_m == pytest.approx(35.0, abs=0.1) and start.lead_speed_mps == pytest.approx(0.0, abs=0.01)
+    assert after.gap_m == pytest.approx(35.0 - (after.progress_m - start.progress_m), abs=0.5) and after.gap_m < 32.0
+    assert abs(after.lead_speed_mps) < 0.01 and not after.crashed

@@ -402,7 +402,7 @@ class MetaDriveWorld:
         manager = engine.traffic_manager
         config = {"spawn_lane_index": lane.index, "spawn_longitude": float(long), "enable_reverse": False}
         if kind == "stopped":
-            car = engine.object_manager.spawn_object(DefaultVehicle, vehicle_config=config)
+            car = manager.spawn_object(DefaultVehicle, vehicle_config=config)  # no policy: it stands
             car.set_break_down()
             car.set_static(True)
             return car
