@@ -105,3 +105,17 @@ def test_compared_with_experts_divides_by_the_experts_progress_on_the_same_run()
     assert [r["progress_vs_expert_pct"] for r in out] == [100.0, 90.0, None, None]
     assert "spec" not in out[0] and "interrupted" not in out[0]
     assert compared_with_experts(rows)[3]["progress_vs_expert_pct"] == 95.0
+
+
+def test_suite_text_is_the_table_the_cost_and_a_line_per_criterion() -> None:
+    from fearguard.drive.suite import cost_line, suite_text
+
+    rows = [{"controller": "guarded", "controller_ms": 4.0, "simulator_ms": 100.0},
+            {"controller": "guarded", "controller_ms": 6.0, "simulator_ms": 300.0},
+            {"controller": "expert", "controller_ms": None, "simulator_ms": 1.0}]
+    checks = [{"criterion": "a", "ok": True, "detail": "1"}, {"criterion": "b", "ok": False, "detail": "2"}]
+    text = suite_text("| t |\n", rows, checks)
+    assert text.startswith("| t |\n") and text.endswith("- PASS a (1)\n- FAIL b (2)\n")
+    assert "5.0 ms median over 2 guarded drives; the simulator's step (physics + rendering): 200.0 ms; fearguard = 2.5 % of it" in text
+    assert "; the world's step: 200.0 ms" in suite_text("", rows, [], "the world's step")
+    assert cost_line(rows[2:]) == ""  # no guarded row: no cost line

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import json
 import multiprocessing
+import statistics
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
@@ -163,3 +164,22 @@ def compared_with_experts(rows: Sequence[Mapping[str, Any]], comparable: Callabl
         row["progress_vs_expert_pct"] = 100 * r["progress_m"] / expert if expert else None
         out.append(row)
     return out
+
+
+def cost_line(rows: Sequence[Mapping[str, Any]], simulator: str = "the simulator's step (physics + rendering)") -> str:
+    """fearguard's per-step cost over every guarded row (the median of the rows' ``controller_ms`` medians) against the
+    world's step (``simulator_ms``), and its share; "" without guarded rows that carry both."""
+    g = [r["controller_ms"] for r in rows if r["controller"] == "guarded" and r.get("controller_ms") is not None]
+    s = [r["simulator_ms"] for r in rows if r["controller"] == "guarded" and r.get("simulator_ms") is not None]
+    if not g or not s:
+        return ""
+    gm, sm = statistics.median(g), statistics.median(s)
+    return (f"fearguard per step (perception + supervisor): {gm:.1f} ms median over {len(g)} guarded drives; {simulator}: "
+            f"{sm:.1f} ms; fearguard = {100 * gm / sm:.1f} % of it")
+
+
+def suite_text(table: str, rows: Sequence[Mapping[str, Any]], checks: Sequence[Mapping[str, Any]], simulator: str | None = None) -> str:
+    """A suite's markdown: its table, the cost line, then PASS/FAIL and the numbers of each criterion."""
+    cost = cost_line(rows) if simulator is None else cost_line(rows, simulator)
+    return table + "\n" + cost + "\n\n" + "\n".join(
+        f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"

@@ -49,7 +49,7 @@ def test_merge_compares_with_the_expert_and_checks_issue_38s_criteria() -> None:
     assert merged[1]["progress_vs_expert_pct"] == 95.0 and "spec" not in merged[1]
     assert [c["ok"] for c in checks] == [True, False, False, False, True, True]
     assert "PASS day 0" in markdown and "FAIL day 1" in markdown and "stopped 8.0 m short, waited" in markdown
-    assert "fearguard = 1.2 % of a MetaDrive step" in markdown
+    assert "MetaDrive's step (physics + rendering at 320x240): 500.0 ms; fearguard = 1.2 % of it" in markdown
     assert criteria([_row("stopped car 1", "guarded", 50.0, lead="stopped", stopped_car={**car, "contact": True})])[0]["ok"] is False
 
 

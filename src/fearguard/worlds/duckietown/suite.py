@@ -14,10 +14,8 @@ from dataclasses import asdict, fields, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from fearguard.drive.plan import RunSpec
-from fearguard.drive.suite import compared_with_experts, process_pool, run_plan_with_tables
+from fearguard.drive.suite import compared_with_experts, process_pool, run_plan_with_tables, suite_text
 from fearguard.worlds.duckietown.drive import DriveOptions, drive
 from fearguard.worlds.duckietown.report import suite_markdown
 
@@ -116,17 +114,6 @@ def criteria(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
-def cost_line(rows: Sequence[dict[str, Any]]) -> str:
-    """fearguard's per-step cost in the loop over every guarded drive (medians of the per-drive medians)."""
-    g = [r["controller_ms"] for r in rows if r["controller"] == "guarded" and r["controller_ms"] is not None]
-    s = [r["simulator_ms"] for r in rows if r["controller"] == "guarded" and r["simulator_ms"] is not None]
-    if not g or not s:
-        return ""
-    gm, sm = float(np.median(g)), float(np.median(s))
-    return (f"fearguard per step (perception + supervisor): {gm:.1f} ms median over {len(g)} guarded drives; the simulator's "
-            f"step (physics + rendering): {sm:.1f} ms; fearguard = {100 * gm / sm:.0f} % of a simulator step")
-
-
 def _folder(out: Path, name: str, options: DriveOptions) -> Path:
     return out / f"{name.replace(' ', '_').replace(',', '').replace('+', 'with')}_{options.controller}_{options.range_sensor}"
 
@@ -136,8 +123,7 @@ def merge(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[di
     PASS/FAIL per criterion)."""
     merged = compared_with_experts(rows, lambda r: r["obstacle_kind"] is None)
     checks = criteria(merged)
-    markdown = suite_markdown(merged) + "\n" + cost_line(merged) + "\n\n" + "\n".join(
-        f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"
+    markdown = suite_text(suite_markdown(merged), merged, checks)
     return merged, checks, markdown
 
 

@@ -18,11 +18,9 @@ from dataclasses import asdict, fields, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from fearguard.drive.interrupt import StopSignal
 from fearguard.drive.plan import RunSpec
-from fearguard.drive.suite import compared_with_experts, process_pool, run_plan_with_tables
+from fearguard.drive.suite import compared_with_experts, process_pool, run_plan_with_tables, suite_text
 from fearguard.worlds.metadrive.drive import DriveOptions, drive
 from fearguard.worlds.metadrive.report import suite_markdown
 
@@ -109,24 +107,12 @@ def criteria(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
-def cost_line(rows: Sequence[dict[str, Any]]) -> str:
-    """fearguard's per-step cost over every guarded drive (medians of the per-drive medians) against MetaDrive's step."""
-    g = [r["controller_ms"] for r in rows if r["controller"] == "guarded" and r["controller_ms"] is not None]
-    s = [r["simulator_ms"] for r in rows if r["controller"] == "guarded" and r["simulator_ms"] is not None]
-    if not g or not s:
-        return ""
-    gm, sm = float(np.median(g)), float(np.median(s))
-    return (f"fearguard per step (perception + supervisor): {gm:.1f} ms median over {len(g)} guarded drives; MetaDrive's step "
-            f"(physics + rendering at 320x240): {sm:.0f} ms; fearguard = {100 * gm / sm:.1f} % of a MetaDrive step")
-
-
 def merge(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]], str]:
     """The rows compared with the expert's progress on the same run, the criteria, and the markdown (table, cost line,
     PASS/FAIL per criterion)."""
     merged = compared_with_experts(rows)
     checks = criteria(merged)
-    markdown = suite_markdown(merged) + "\n" + cost_line(merged) + "\n\n" + "\n".join(
-        f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"
+    markdown = suite_text(suite_markdown(merged), merged, checks, "MetaDrive's step (physics + rendering at 320x240)")
     return merged, checks, markdown
 
 
