@@ -1,5 +1,5 @@
 """Command line: ``demo``, ``rules check|plot|explain``, ``calibrate``, ``replay``, ``run``, ``scenarios``, ``suite``, ``sweep``,
-``verify``, ``duckietown``, ``duckietown-suite``.
+``verify``, ``duckietown``, ``duckietown-suite``, ``metadrive``, ``metadrive-suite``.
 
 A thin layer: it parses arguments, calls the library, prints, and maps errors to exit codes
 (0 fine, 1 a check failed, 2 bad input: ``Type: message`` on stderr, 130 / 143 interrupted by SIGINT /
@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from fearguard.observation import Lead
     from fearguard.supervisor import FearGuard
 
-FRAME_LOOPS = ("replay", "run", "suite", "sweep")  # commands that finish the current frame on a signal
+FRAME_LOOPS = ("replay", "run", "suite", "sweep", "metadrive", "metadrive-suite")  # commands that finish the current frame on a signal
 MCAP_HELP = "also write run.mcap for Foxglove: the annotated image, the command, the cues and the reasons (the ros extra)"
 VIDEO_HELP = "also write the annotated video (annotated.mp4, H.264; annotated.avi, MJPG, without the video extra)"
 OUT_ROOT = Path("fearguard-out")  # where a command writes when --out is not given: OUT_ROOT/COMMAND-LABEL-YYYYmmdd-HHMMSS
@@ -635,6 +635,70 @@ def cmd_duckietown_suite(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_metadrive(args: argparse.Namespace) -> int:
+    """One drive in MetaDrive (guarded, or a baseline) → log.jsonl, summary.json, timeline.png (and annotated.mp4)."""
+    from fearguard.worlds.metadrive.drive import DriveOptions, drive
+    from fearguard.worlds.metadrive.report import print_drive
+
+    out = args.out or _new_out("metadrive", f"{args.map}-seed{args.seed}")
+    try:
+        options = DriveOptions(
+            map_blocks=args.map, lanes=args.lanes, traffic_density=args.traffic, lighting=args.lighting, seed=args.seed,
+            seconds=args.seconds, controller=args.baseline or "guarded", cruise_mps=args.cruise_mps, range_sensor=args.range,
+            lead=args.lead, lead_ahead_m=args.lead_ahead, lead_speed_mps=args.lead_speed, width_px=args.width,
+            height_px=args.width * 3 // 4, rules=args.rules, video=args.video, plots=not args.no_plots, mcap=args.mcap,
+        )
+    except ValueError as exc:
+        raise FearguardError(f"metadrive: {exc}") from None
+    with _Progress(f"metadrive {args.map} seed {args.seed}", unit="steps") as progress:
+        result = drive(options, out, progress.update, stop=args.stop)
+    print_drive(result.summary)
+    print(f"wrote {out}/log.jsonl, summary.json" + (", timeline.png" if options.plots and options.controller == "guarded" else ""))
+    if result.video_path is not None:
+        print(f"video {result.video_path}")
+    if result.interrupted:
+        print("interrupted: the log holds every step driven so far")
+        return _interrupted_exit(args.stop)
+    return 0
+
+
+def cmd_metadrive_suite(args: argparse.Namespace) -> int:
+    """Development seeds guarded / unguarded / expert, a stopped car, night → runs.jsonl, suite.md, suite.json."""
+    from fearguard.worlds.metadrive.drive import DriveOptions
+    from fearguard.worlds.metadrive.suite import plan, run_suite
+
+    executor = _executor(args)  # before anything is written: without Dask, a one-line error
+    out = (Path(args.out) if args.out else Path(_new_out("metadrive-suite", f"{len(args.seeds)}seeds"))).resolve()  # workers elsewhere
+    try:
+        base = DriveOptions(map_blocks=args.map, lanes=args.lanes, traffic_density=args.traffic, cruise_mps=args.cruise_mps)
+        specs = plan(args.seeds, args.seconds, args.stopped_seeds, args.night_seeds, out, base, args.controllers)
+    except ValueError as exc:
+        raise FearguardError(f"metadrive-suite: {exc}") from None
+    print(f"metadrive-suite: {len(specs)} drives → {out}{_on(executor)}", file=sys.stderr)
+    def failed(r: dict) -> bool:
+        return r["controller"] == "guarded" and bool(r.get("crashes") or r.get("out_of_road"))
+
+    with _RunProgress("metadrive-suite", executor, line=lambda r: f"{r['run']} {r['controller']}", failed=failed) as bar:
+        table, interrupted = run_suite(out, specs, executor=executor, on_run=lambda line: print(line, flush=True),
+                                       resume=args.resume, stop=args.stop, on_progress=bar.update, on_row=bar.row)
+    print(table)
+    print(f"wrote {out}/runs.jsonl, suite.md, suite.json")
+    if interrupted:
+        print("interrupted: the table holds the finished drives; run the same command with --resume to go on")
+        return _interrupted_exit(args.stop)
+    return 0
+
+
+def _blocks(text: str) -> str:
+    """An argparse type: a MetaDrive block string (S straight, C curve, r/R ramps, X/T/O junctions, ...)."""
+    from fearguard.worlds.metadrive.world import BLOCK_LETTERS
+
+    if not text or not set(text) <= BLOCK_LETTERS:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a MetaDrive block string: letters of {''.join(sorted(BLOCK_LETTERS))}, "
+                                         "e.g. SCSC (straight, curve, straight, curve)")
+    return text
+
+
 def _count(minimum: int) -> Callable[[str], int]:
     """An argparse type: a whole number >= minimum (a clear usage error, exit 2, before anything runs)."""
 
@@ -645,6 +709,19 @@ def _count(minimum: int) -> Callable[[str], int]:
             raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
         if value < minimum:
             raise argparse.ArgumentTypeError(f"must be >= {minimum}, got {value}")
+        return value
+
+    return parse
+
+
+def _bounded_count(low: int, high: int) -> Callable[[str], int]:
+    """An argparse type: a whole number in low..high (exit 2, one line)."""
+    at_least = _count(low)
+
+    def parse(text: str) -> int:
+        value = at_least(text)
+        if value > high:
+            raise argparse.ArgumentTypeError(f"must be <= {high}, got {value}")
         return value
 
     return parse
@@ -889,6 +966,47 @@ def build_parser() -> argparse.ArgumentParser:
     dts.add_argument("--resume", action="store_true", help="skip the drives already in OUT/runs.jsonl (after an interruption)")
     _batch_options(dts, "drives")
     dts.set_defaults(func=cmd_duckietown_suite)
+    md = sub.add_parser("metadrive", help="drive MetaDrive's road car from its camera (needs `bash .ci/metadrive.sh`)")
+    md.add_argument("--map", type=_blocks, default="SCSC", help="MetaDrive block string (default SCSC: straight, curve, straight, curve)")
+    md.add_argument("--lanes", type=_bounded_count(1, 6), default=3, help="lanes per direction, 1..6 (default 3)")
+    md.add_argument("--traffic", type=_number(0.0, below=1.000001), default=0.05,
+                    help="MetaDrive's traffic density 0..1 (default 0.05, light; 0.1 is MetaDrive's default, 0.3 dense)")
+    md.add_argument("--lighting", choices=("day", "dusk", "night"), default="day", help="light preset (docs/metadrive.md)")
+    md.add_argument("--seed", type=_count(0), default=0, help="MetaDrive scenario seed (map geometry, traffic); default 0")
+    md.add_argument("--seconds", type=_number(above=0.0), default=30.0, help="simulated duration (default 30)")
+    md.add_argument("--cruise-mps", type=_number(above=0.0, below=22.3), default=10.0, help="cruise speed (default 10 m/s)")
+    md.add_argument("--baseline", choices=("unguarded", "expert"), default=None,
+                    help="unguarded: the lane steering alone at cruise; expert: MetaDrive's own IDM policy at cruise")
+    md.add_argument("--range", choices=("none", "radar"), default="none",
+                    help="forward range sensor: none (camera only) or a 0.3-80 m radar from the simulator's truth")
+    md.add_argument("--lead", choices=("slower", "stopped"), default=None, help="add a car in the ego's lane ahead")
+    md.add_argument("--lead-ahead", type=_number(above=0.0), default=35.0,
+                    help="its distance ahead, bumper to bumper (m, default 35: on the first block, the lanes MetaDrive knows at the start)")
+    md.add_argument("--lead-speed", type=_number(above=0.0), default=5.0, help="the slower lead's speed (m/s, default 5)")
+    md.add_argument("--width", type=_count(160), default=320, help="camera width in pixels, 4:3 (default 320)")
+    md.add_argument("--rules", default=None, help="rule file (default: the bundled rules/road_car.toml)")
+    md.add_argument("--out", type=_out_folder, default=None, help="output folder (log.jsonl, summary.json, timeline.png, the video) "
+                    + OUT_HELP % "metadrive")
+    md.add_argument("--video", action="store_true", help=VIDEO_HELP)
+    md.add_argument("--no-plots", action="store_true", help="skip timeline.png")
+    md.add_argument("--mcap", action="store_true", help=MCAP_HELP)
+    md.set_defaults(func=cmd_metadrive)
+    mds = sub.add_parser("metadrive-suite", help="MetaDrive: development seeds guarded and with both baselines, a stopped car, night")
+    mds.add_argument("--out", default=None, help="output folder (runs.jsonl, suite.md, suite.json, a folder per drive) "
+                     + OUT_HELP % "metadrive-suite")
+    mds.add_argument("--seeds", type=_count(0), nargs="+", default=[0, 1, 2], help="day seeds (default 0 1 2)")
+    mds.add_argument("--stopped-seeds", type=_count(0), nargs="*", default=[0], help="seeds with a stopped car in the lane (default 0)")
+    mds.add_argument("--night-seeds", type=_count(0), nargs="*", default=[0], help="seeds driven at night (default 0)")
+    mds.add_argument("--seconds", type=_number(above=0.0), default=30.0, help="duration of each drive (default 30)")
+    mds.add_argument("--controllers", nargs="+", choices=("guarded", "unguarded"), default=["guarded", "unguarded"],
+                     help="the day drives besides the expert's (default: guarded unguarded)")
+    mds.add_argument("--map", type=_blocks, default="SCSC", help="MetaDrive block string (default SCSC)")
+    mds.add_argument("--lanes", type=_bounded_count(1, 6), default=3, help="lanes per direction (default 3)")
+    mds.add_argument("--traffic", type=_number(0.0, below=1.000001), default=0.05, help="traffic density 0..1 (default 0.05)")
+    mds.add_argument("--cruise-mps", type=_number(above=0.0, below=22.3), default=10.0, help="cruise speed (default 10 m/s)")
+    mds.add_argument("--resume", action="store_true", help="skip the drives already in OUT/runs.jsonl (after an interruption)")
+    _batch_options(mds, "drives")
+    mds.set_defaults(func=cmd_metadrive_suite)
     return parser
 
 

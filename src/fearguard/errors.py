@@ -5,8 +5,8 @@
     │   ├── CalibrationError        chessboard photos cannot calibrate (vision/calibration.py)
     │   ├── SteerImportError        a ``module:function`` that names no usable steering function (files/steer_import.py)
     │   ├── SetupError              a vehicle, preset or steering function the testing kit cannot use (testing/subject.py)
-    │   ├── SimulatorMissing        gym-duckietown is not installed in this environment (worlds/duckietown/world.py)
-    │   ├── MapError                a map name or start the simulator does not know (worlds/duckietown/world.py)
+    │   ├── SimulatorMissing        gym-duckietown or MetaDrive is not installed (worlds/duckietown/world.py, metadrive/headless.py)
+    │   ├── MapError                a map, start or placement a simulator cannot build (worlds/duckietown/world.py, metadrive/world.py)
     │   ├── ClusterError            Dask is not installed, or its scheduler cannot be reached (drive/cluster.py)
     │   ├── SweepError              a sweep's --set that names no number of the rules or the vehicle (sim/sweep.py)
     │   └── FileError               a file is wrong: ``FileError(path, where, problem)`` → "path, where: problem"
@@ -140,11 +140,11 @@ class SetupError(FearguardError):
 
 
 class SimulatorMissing(FearguardError):
-    """gym-duckietown is not installed in this Python environment."""
+    """A simulator (gym-duckietown, MetaDrive) is not installed in this Python environment."""
 
 
 class MapError(FearguardError):
-    """A map name or start the simulator does not know."""
+    """A map name, start, block string or placement the simulator does not know or cannot build."""
 
 
 class ClusterError(FearguardError):

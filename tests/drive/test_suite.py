@@ -77,3 +77,47 @@ def test_a_row_names_its_run_and_old_rows_are_recognised() -> None:
         runner("carla")
     row = run_row(RunSpec("sim", "clear_straight", "unguarded", 1, {"file": str(SHORT)}))
     assert row["spec"]["controller"] == "unguarded" and row["scenario"] == "clear_straight" and row["collisions"] == 0
+
+
+def test_run_plan_with_tables_rewrites_the_tables_after_every_row_resumed_ones_included(specs: list[RunSpec], tmp_path: Path) -> None:
+    from fearguard.drive.suite import run_plan_with_tables
+
+    def merge(rows: list[dict]) -> tuple[list[dict], list[dict], str]:
+        return rows, [{"criterion": "rows", "ok": True}], "\n".join(r["scenario"] + " " + r["controller"] for r in rows) + "\n"
+
+    seen: list[int] = []
+    first, _ = run_plan_with_tables(specs[:3], tmp_path, merge, on_row=lambda row: seen.append(len(json.loads(
+        (tmp_path / "suite.json").read_text())["rows"])))
+    assert seen == [1, 2, 3] and len(first.rows) == 3  # the table grew with every row
+    result, markdown = run_plan_with_tables(specs, tmp_path, merge, resume=True)
+    table = json.loads((tmp_path / "suite.json").read_text())
+    assert result.resumed == 3 and len(table["rows"]) == len(specs) and table["criteria"] == [{"criterion": "rows", "ok": True}]
+    assert (tmp_path / "suite.md").read_text() == markdown and markdown.count("\n") == len(specs)
+    assert [r["scenario"] for r in table["rows"]] == [r["scenario"] for r in result.rows]  # plan order
+
+
+def test_compared_with_experts_divides_by_the_experts_progress_on_the_same_run() -> None:
+    from fearguard.drive.suite import compared_with_experts
+
+    rows = [{"run": "a", "controller": "expert", "progress_m": 200.0, "spec": {}, "interrupted": False},
+            {"run": "a", "controller": "guarded", "progress_m": 180.0},
+            {"run": "b", "controller": "guarded", "progress_m": 50.0},  # no expert on b
+            {"run": "a", "controller": "unguarded", "progress_m": 190.0, "skip": True}]
+    out = compared_with_experts(rows, lambda r: not r.get("skip"))
+    assert [r["progress_vs_expert_pct"] for r in out] == [100.0, 90.0, None, None]
+    assert "spec" not in out[0] and "interrupted" not in out[0]
+    assert compared_with_experts(rows)[3]["progress_vs_expert_pct"] == 95.0
+
+
+def test_suite_text_is_the_table_the_cost_and_a_line_per_criterion() -> None:
+    from fearguard.drive.suite import cost_line, suite_text
+
+    rows = [{"controller": "guarded", "controller_ms": 4.0, "simulator_ms": 100.0},
+            {"controller": "guarded", "controller_ms": 6.0, "simulator_ms": 300.0},
+            {"controller": "expert", "controller_ms": None, "simulator_ms": 1.0}]
+    checks = [{"criterion": "a", "ok": True, "detail": "1"}, {"criterion": "b", "ok": False, "detail": "2"}]
+    text = suite_text("| t |\n", rows, checks)
+    assert text.startswith("| t |\n") and text.endswith("- PASS a (1)\n- FAIL b (2)\n")
+    assert "5.0 ms median over 2 guarded drives; the simulator's step (physics + rendering): 200.0 ms; fearguard = 2.5 % of it" in text
+    assert "; the world's step: 200.0 ms" in suite_text("", rows, [], "the world's step")
+    assert cost_line(rows[2:]) == ""  # no guarded row: no cost line

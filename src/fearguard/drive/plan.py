@@ -21,6 +21,7 @@ ROW_RUNNERS: dict[str, str] = {  # world → the function that runs one of its r
     "sim": "fearguard.sim.suite:run_row",
     "duckietown": "fearguard.worlds.duckietown.suite:run_row",
     "replay": "fearguard.replay.fleet:run_row",  # a recording of a fleet replayed into its folder
+    "metadrive": "fearguard.worlds.metadrive.suite:run_row",
 }
 
 

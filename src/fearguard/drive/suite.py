@@ -12,7 +12,9 @@ ran). An executor is a generator: closing it (the plan stopped, Ctrl-C) cancels 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Generator, Sequence
+import json
+import statistics
+from collections.abc import Callable, Generator, Mapping, Sequence
 from contextlib import closing
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,9 +22,10 @@ from typing import Any
 
 from fearguard.drive.interrupt import StopSignal
 from fearguard.drive.plan import RunSpec, row_key, run_row
-from fearguard.outputs.report import JsonlLog, read_jsonl
+from fearguard.outputs.report import JsonlLog, json_value, read_jsonl
 
 Row = dict[str, Any]
+Merge = Callable[[Sequence[Row]], tuple[list[Row], list[Row], str]]  # rows → (the table's rows, the criteria, the markdown)
 Executor = Callable[[Sequence[RunSpec], StopSignal | None], Generator[tuple[int, Row], None, None]]  # (index, row) of each spec, any order
 
 
@@ -104,3 +107,66 @@ def _run_rows(todo: Sequence[tuple[int, RunSpec]], executor: Executor, stop: Sto
             if stop:
                 return False
     return False
+
+
+def run_plan_with_tables(
+    plan: Sequence[RunSpec], out: Path, merge: Merge, *, resume: bool = False, stop: StopSignal | None = None,
+    executor: Executor | None = None, on_row: Callable[[Row], None] | None = None,
+    on_progress: Callable[[int, int], None] | None = None,
+) -> tuple[PlanResult, str]:
+    """``run_plan`` into ``out/runs.jsonl``, with the world's tables rewritten after every row: ``merge(rows)`` of every
+    finished row (resumed ones too) in plan order → ``out/suite.md`` and ``out/suite.json`` (its rows and criteria), so
+    an interrupted suite keeps a table of what it finished. Returns the plan's result and the last markdown."""
+    out.mkdir(parents=True, exist_ok=True)
+    runs_log = out / "runs.jsonl"
+    order = {spec.key: i for i, spec in enumerate(plan)}
+    finished = finished_rows(runs_log) if resume else []
+    markdown = ""
+
+    def write(rows: Sequence[Row]) -> None:
+        nonlocal markdown
+        merged, checks, markdown = merge(sorted(rows, key=lambda r: order.get(row_key(r), len(order))))
+        (out / "suite.md").write_text(markdown, encoding="utf-8")
+        (out / "suite.json").write_text(json.dumps(json_value({"rows": merged, "criteria": checks}), indent=2) + "\n", encoding="utf-8")
+
+    def kept(row: Row) -> None:
+        finished.append(row)
+        write(finished)
+        if on_row is not None:
+            on_row(row)
+
+    result = run_plan(plan, runs_log=runs_log, resume=resume, stop=stop, executor=executor, on_row=kept, on_progress=on_progress)
+    write(result.rows)
+    return result, markdown
+
+
+def compared_with_experts(rows: Sequence[Mapping[str, Any]], comparable: Callable[[Mapping[str, Any]], bool] | None = None) -> list[Row]:
+    """Each row without its spec and interrupted flag, with ``progress_vs_expert_pct``: 100 × its ``progress_m`` over that
+    of the ``expert`` row of the same ``run`` (None without one, or when ``comparable(row)`` is False)."""
+    experts = {r["run"]: r["progress_m"] for r in rows if r["controller"] == "expert"}
+    out = []
+    for r in rows:
+        expert = experts.get(r["run"]) if comparable is None or comparable(r) else None
+        row = {k: v for k, v in r.items() if k not in ("spec", "interrupted")}
+        row["progress_vs_expert_pct"] = 100 * r["progress_m"] / expert if expert else None
+        out.append(row)
+    return out
+
+
+def cost_line(rows: Sequence[Mapping[str, Any]], simulator: str = "the simulator's step (physics + rendering)") -> str:
+    """fearguard's per-step cost over every guarded row (the median of the rows' ``controller_ms`` medians) against the
+    world's step (``simulator_ms``), and its share; "" without guarded rows that carry both."""
+    g = [r["controller_ms"] for r in rows if r["controller"] == "guarded" and r.get("controller_ms") is not None]
+    s = [r["simulator_ms"] for r in rows if r["controller"] == "guarded" and r.get("simulator_ms") is not None]
+    if not g or not s:
+        return ""
+    gm, sm = statistics.median(g), statistics.median(s)
+    return (f"fearguard per step (perception + supervisor): {gm:.1f} ms median over {len(g)} guarded drives; {simulator}: "
+            f"{sm:.1f} ms; fearguard = {100 * gm / sm:.1f} % of it")
+
+
+def suite_text(table: str, rows: Sequence[Mapping[str, Any]], checks: Sequence[Mapping[str, Any]], simulator: str | None = None) -> str:
+    """A suite's markdown: its table, the cost line, then PASS/FAIL and the numbers of each criterion."""
+    cost = cost_line(rows) if simulator is None else cost_line(rows, simulator)
+    return table + "\n" + cost + "\n\n" + "\n".join(
+        f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"

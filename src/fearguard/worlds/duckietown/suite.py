@@ -9,17 +9,13 @@ criteria of issue 14 are checked at the end from the rows:
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, fields, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from fearguard.drive.plan import RunSpec
-from fearguard.drive.suite import Executor, run_plan
-from fearguard.outputs.report import json_value
+from fearguard.drive.suite import Executor, compared_with_experts, run_plan_with_tables, suite_text
 from fearguard.worlds.duckietown.drive import DriveOptions, drive
 from fearguard.worlds.duckietown.report import suite_markdown
 
@@ -119,17 +115,6 @@ def criteria(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
-def cost_line(rows: Sequence[dict[str, Any]]) -> str:
-    """fearguard's per-step cost in the loop over every guarded drive (medians of the per-drive medians)."""
-    g = [r["controller_ms"] for r in rows if r["controller"] == "guarded" and r["controller_ms"] is not None]
-    s = [r["simulator_ms"] for r in rows if r["controller"] == "guarded" and r["simulator_ms"] is not None]
-    if not g or not s:
-        return ""
-    gm, sm = float(np.median(g)), float(np.median(s))
-    return (f"fearguard per step (perception + supervisor): {gm:.1f} ms median over {len(g)} guarded drives; the simulator's "
-            f"step (physics + rendering): {sm:.1f} ms; fearguard = {100 * gm / sm:.0f} % of a simulator step")
-
-
 def _folder(out: Path, name: str, options: DriveOptions) -> Path:
     return out / f"{name.replace(' ', '_').replace(',', '').replace('+', 'with')}_{options.controller}_{options.range_sensor}"
 
@@ -137,16 +122,9 @@ def _folder(out: Path, name: str, options: DriveOptions) -> Path:
 def merge(rows: Sequence[dict[str, Any]]) -> tuple[list[dict[str, Any]], list[dict[str, Any]], str]:
     """The rows compared with the expert's progress on the same run, the criteria, and the markdown (table, cost line,
     PASS/FAIL per criterion)."""
-    experts = {r["run"]: r["progress_m"] for r in rows if r["controller"] == "expert"}
-    merged = []
-    for r in rows:
-        expert = experts.get(r["run"]) if r["obstacle_kind"] is None else None
-        row = {k: v for k, v in r.items() if k not in ("spec", "interrupted")}
-        row["progress_vs_expert_pct"] = 100 * r["progress_m"] / expert if expert else None
-        merged.append(row)
+    merged = compared_with_experts(rows, lambda r: r["obstacle_kind"] is None)
     checks = criteria(merged)
-    markdown = suite_markdown(merged) + "\n" + cost_line(merged) + "\n\n" + "\n".join(
-        f"- {'PASS' if c['ok'] else 'FAIL'} {c['criterion']} ({c['detail']})" for c in checks) + "\n"
+    markdown = suite_text(suite_markdown(merged), merged, checks)
     return merged, checks, markdown
 
 
@@ -158,28 +136,14 @@ def run_suite(out_dir: str | Path, seconds: float = 60.0, seeds: int = 10, maps:
     drives at a time, each in its own worker process); runs.jsonl grows a row per drive, suite.md / suite.json are
     rewritten after every drive. Returns the markdown."""
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     specs = plan(seconds, seeds, maps, rand_seconds, out)
-    finished: list[dict[str, Any]] = []
-    markdown = ""
-
-    def write(rows: Sequence[dict[str, Any]]) -> None:
-        nonlocal markdown
-        merged, checks, markdown = merge(rows)
-        (out / "suite.md").write_text(markdown, encoding="utf-8")
-        (out / "suite.json").write_text(json.dumps(json_value({"rows": merged, "criteria": checks}), indent=2) + "\n", encoding="utf-8")
 
     def said(row: dict[str, Any]) -> None:
-        finished.append(row)
         if on_row is not None:
             on_row(row)
-        order = {spec.key: i for i, spec in enumerate(specs)}
-        write(sorted(finished, key=lambda r: order.get((r["spec"]["world"], r["spec"]["name"], r["spec"]["controller"],
-                                                        r["spec"]["seed"]), 0)))
         if on_run is not None:
             on_run(f"{row['run']} {row['controller']}: progress {row['progress_m']:.2f} m, departures {row['departures']}, "
                    f"collisions {row['collisions']}, EMERGENCY {row['emergency_s']:.1f} s")
 
-    result = run_plan(specs, runs_log=out / "runs.jsonl", resume=resume, executor=executor, on_row=said, on_progress=on_progress)
-    write(result.rows)
+    _, markdown = run_plan_with_tables(specs, out, merge, resume=resume, executor=executor, on_row=said, on_progress=on_progress)
     return markdown

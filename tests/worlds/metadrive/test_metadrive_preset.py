@@ -1,0 +1,72 @@
+"""The MetaDrive preset: its camera, its limits and the pure-pursuit actuation (no simulator needed)."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from fearguard.vehicle import PRESETS
+from fearguard.worlds.metadrive import preset as p
+
+
+def test_camera_is_metadrives_rgb_camera() -> None:
+    cam = p.metadrive_camera(320, 240)
+    assert cam.fx_px == cam.fy_px and (cam.cx_px, cam.cy_px) == (160.0, 120.0)  # square pixels, centred
+    assert math.degrees(2 * math.atan(cam.cx_px / cam.fx_px)) == pytest.approx(60.0)  # lens.setFov(60): horizontal
+    assert math.degrees(2 * math.atan(cam.cy_px / cam.fy_px)) == pytest.approx(46.83, abs=0.01)  # Panda3D's vertical at 4:3
+    assert (cam.mount_height_m, cam.pitch_deg) == (2.095, -0.59681)  # 2.1 m up, pitched slightly up
+    assert cam.horizon_v_px() > cam.cy_px  # looking up: the horizon lies below the image centre
+    assert p.metadrive_camera(640, 480) == cam.scaled_to(640, 480)
+
+
+def test_aim_point_is_on_the_road_the_camera_sees() -> None:
+    for w, h in ((160, 120), (320, 240), (640, 480)):
+        aim = p.lane_aim_m(p.metadrive_camera(w, h))
+        assert 10.0 < aim < 25.0  # the image lane model's look-ahead row: about 16 m ahead
+
+
+def test_limits_are_the_road_car_where_metadrive_agrees() -> None:
+    lim, road = p.metadrive_limits(), PRESETS["road_car"]
+    assert lim.max_speed_mps == pytest.approx(80 / 3.6) and lim.width_m == 1.852 and p.WHEELBASE_M == pytest.approx(2.469, abs=1e-3)
+    assert not lim.has_ultrasonic and p.metadrive_limits(radar=True).has_ultrasonic
+    for same in ("max_decel_mps2", "reaction_time_s", "stop_margin_m", "max_lateral_accel_mps2", "lead_max_decel_mps2"):
+        assert getattr(lim, same) == getattr(road, same)
+    radar = p.metadrive_limits(radar=True)
+    assert (radar.ultrasonic_min_range_m, radar.ultrasonic_max_range_m) == (p.RADAR_MIN_RANGE_M, p.RADAR_MAX_RANGE_M)
+
+
+@given(st.floats(-30.0, 30.0), st.floats(5.0, 30.0))
+def test_pursuit_arc_passes_through_the_aim_point(bearing: float, aim: float) -> None:
+    delta = math.radians(p.pursuit_wheel_angle_deg(bearing, aim))
+    kappa = math.tan(delta) / p.WHEELBASE_M
+    x = p.REAR_AXLE_TO_CAMERA_M + aim * math.cos(math.radians(bearing))
+    y = aim * math.sin(math.radians(bearing))
+    assert kappa * (x * x + y * y) == pytest.approx(2 * y, abs=1e-9)  # the circle through the rear axle and the aim point
+
+
+@given(st.floats(-30.0, 30.0))
+def test_a_left_bearing_steers_left(bearing: float) -> None:
+    a = p.steering_action(bearing, 10.0, 10.0, 16.0)
+    assert -1.0 <= a.steer <= 1.0
+    assert a.steer == 0.0 or math.copysign(1, a.steer) == math.copysign(1, bearing)  # + = left, as MetaDrive's steer
+
+
+def test_speed_controller_brakes_to_stand_and_never_exceeds_full_pedal() -> None:
+    assert p.throttle_for(0.0, 5.0) == -1.0 and p.throttle_for(0.2, 0.0) == -1.0  # stand still: full brake
+    assert p.throttle_for(10.0, 0.0) == 1.0 and p.throttle_for(10.0, 20.0) == -1.0
+    assert p.throttle_for(10.0, 9.0) == pytest.approx(p.ROLLING_THROTTLE + p.SPEED_GAIN)
+    assert p.steering_action(0.0, -3.0, 2.0, 16.0).speed_target_mps == 0.0  # no reverse
+
+
+@pytest.mark.parametrize("bearing_deg", [1.0, 5.0, 10.0, -10.0])
+def test_the_limits_wheelbase_turns_the_aim_bearing_into_the_arc_the_car_drives(bearing_deg: float) -> None:
+    """The policy's bicycle model (κ = tan δ / L) with the preset's wheelbase gives the curvature of the pure-pursuit
+    arc the actuation drives for that bearing (within 2 % up to 10°), not a 4× tighter turn."""
+    aim = 16.0
+    wheel = p.pursuit_wheel_angle_deg(bearing_deg, aim)
+    driven = math.tan(math.radians(wheel)) / p.WHEELBASE_M
+    assumed = math.tan(math.radians(bearing_deg)) / p.metadrive_limits(aim_m=aim).wheelbase_m
+    assert assumed == pytest.approx(driven, rel=0.02)
