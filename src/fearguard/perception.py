@@ -66,6 +66,7 @@ class Perceived:
     lane: LaneGeometry | None = None  # the ego lane in metres on the ground (needs a camera with its mounting height)
     lane_steering_deg: float | None = None  # the frame pipeline's own steering toward the lane centre (finite), if any
     clear_m: float = 0.0  # [m] how far ahead the path is known clear (range sensor, the camera's object search); 0: unknown
+    stop_line_m: float | None = None  # [m] a stop line across the ego lane ahead, as the camera's lane search found it
     range_estimate: RangeEstimate | None = None
     localisation: LocalisationState | None = None
     timings_ms: dict[str, float] = field(default_factory=dict)
@@ -138,6 +139,7 @@ class Perception:
         lane, lane_steering = self._lane(analysis)
         return Perceived(cues=cues, lead=lead, alerts=tuple(reasons), facts=tuple(facts), analysis=analysis, lane=lane,
                          lane_steering_deg=lane_steering, clear_m=self._clear_m(range_m, analysis, obs),
+                         stop_line_m=analysis.stop_line_m if analysis is not None else None,
                          range_estimate=estimate, localisation=loc, timings_ms=timings)
 
     def _clear_m(self, range_m: float, analysis: FrameAnalysis | None, obs: Observation) -> float:

@@ -60,6 +60,7 @@ from fearguard.policy.decision import (
     rule_reasons,
 )
 from fearguard.policy.lane_check import LaneCheck, lane_check
+from fearguard.policy.stop_line import StopLine, next_stop_line
 from fearguard.readings import finite_reading
 from fearguard.steering_deadline import SteeringDeadline
 from fearguard.vehicle import VehicleLimits
@@ -99,6 +100,7 @@ class _State:
     out_steering_deg: float | None = None  # last steering answered (the rate limit starts from it)
     estimator_distrusted: bool = False  # the last lane check overrode the wrapped steering
     recovery: Recovery = field(default_factory=Recovery)
+    stop_line: StopLine = field(default_factory=StopLine)  # standing before a stop line, or crossing after one
     range_noted: bool = False  # a range was given to a car that declares no range sensor, and the reasons said so
     raw_steering: deque[float] = field(default_factory=deque)  # the last oscillation_flips + 1 wrapped angles
     periods_s: deque[float] = field(default_factory=lambda: deque(maxlen=PERIOD_MEMORY))
@@ -277,7 +279,7 @@ class FearGuard:
         closing = self._closing_speed(obs, t, range_m, perceived)
         result, moving = self._moving_object(cues, result, range_m, speed, closing)
         imminent = imminent_collision(range_m, speed_now, v, closing)
-        clear_m = self._clear_m(cues, perceived, range_m)
+        clear_m = max(self._clear_m(cues, perceived, range_m), st.stop_line.clear_left_m())  # crossing: as known at the stop
         over = frozenset(c for c, f in result.cause_fears.items() if f >= cfg.emergency_enter_fear)
         over |= {Cause.COLLISION} if imminent else set()
         grace = self._grace_s(over, imminent, cues, clear_m, lead)
@@ -295,6 +297,10 @@ class FearGuard:
         st.estimator_distrusted = choice.distrusted
         wanted, strategy = choice.steering_deg, Strategy.PASS_THROUGH
         caps = [fear_limit, envelope.speed_mps, choice.cap_mps, self._grace_cap(grace, t, reasons)]
+        line_m = perceived.stop_line_m if perceived is not None else None
+        st.stop_line, line_cap, line_why = next_stop_line(st.stop_line, line_m, speed_now, t, dt, cfg, v, clear_m)
+        caps.append(line_cap)
+        reasons.extend([line_why] if line_why else [])
         mode = Mode.CAUTION if choice.caution and st.mode.mode is Mode.NORMAL else st.mode.mode
         reasons.extend([choice.reason] if choice.reason else [])
         if st.mode.mode is Mode.EMERGENCY:
@@ -381,6 +387,8 @@ class FearGuard:
         light_alone = replace(Cues(*calm_values(self.rules.brightness_band)), brightness=cues.brightness)
         if self.rules.evaluate(light_alone).fear >= cfg.emergency_enter_fear:
             return 0.0
+        if self._state.stop_line.crossed_m is not None:
+            return math.inf  # crossing after a served stop line: the markings are missing there by design
         return cfg.road_enter_s
 
     def _grace_cap(self, grace: float, t: float, reasons: list[str]) -> float:
@@ -391,8 +399,11 @@ class FearGuard:
                 and st.mode.over_since_s is not None):
             return math.inf
         cap = cfg.road_doubt_fraction * self.vehicle.max_speed_mps
-        reasons.append(f"road picture not trusted for {t - st.mode.over_since_s:.1f} of {grace:g} s with the path clear: "
-                       f"slowing to {cap:.2f} m/s before an emergency (a flicker is not one)")
+        if math.isinf(grace):
+            reasons.append(f"crossing after a stop line, the markings missing, the path clear as seen at the stop: {cap:.2f} m/s")
+        else:
+            reasons.append(f"road picture not trusted for {t - st.mode.over_since_s:.1f} of {grace:g} s with the path clear: "
+                           f"slowing to {cap:.2f} m/s before an emergency (a flicker is not one)")
         return cap
 
     def _steer_out(self, wanted: float, dt: float, reasons: list[str]) -> float:

@@ -12,6 +12,7 @@ so a cue getting worse can only add caps: the limit never rises when a cue worse
     modes.py      the mode machine (enter counter, hold, latched causes)
     emergency.py  the plan of each active cause, the re-acquisition creep
     lane_check.py will the wrapped steering cross a lane boundary soon?
+    stop_line.py  stand before a stop line, wait, then cross
     decision.py   one frame's decision as named steps: speed caps, the steering choice, the explanation
 """
 

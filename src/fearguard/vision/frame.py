@@ -31,7 +31,7 @@ from fearguard.vision.exposure import Exposure, road_exposure
 from fearguard.vision.ground_lanes import GroundLanes, GroundLaneSpec, aim_point, ground_lanes_in_image
 from fearguard.vision.lanes import LaneLine, RoadRegion, assumed_horizon_v_px, detect_lanes, region_mask, road_region, work_size
 from fearguard.vision.lead import detect_lead, lead_from_box
-from fearguard.vision.obstacle import Obstacle, detect_obstacle
+from fearguard.vision.obstacle import Obstacle, search_lane
 from fearguard.vision.occlusion import default_lines, occlusion, road_appearance, road_reference, surface_maps
 from fearguard.vision.qr import detect_qr
 from fearguard.vision.steering import aim_point_u, lookahead_row, steering_from_aim
@@ -66,6 +66,7 @@ class FrameAnalysis:
     timings_ms: Mapping[str, float] = field(default_factory=dict)
     obstacle: Obstacle | None = None  # anything standing in the ego lane, with its ground-plane range (vision/obstacle.py)
     searched_m: float = 0.0  # [m] how far ahead the object search found the lane free of objects or looked (0: no search)
+    stop_line_m: float | None = None  # [m] ground range to a painted band across the ego lane (a stop line), if one is seen
     ground: GroundLanes | None = None  # the bending lane in the ground plane, when the pipeline fits one (vision/ground_lanes.py)
     curves_px: tuple[np.ndarray | None, np.ndarray | None] | None = None  # its boundaries as polylines (u, v), frame pixels
     t_s: float = _NAN  # [s] when the frame was taken (what a steering that depends on time, e.g. a fault injector, reads)
@@ -198,6 +199,7 @@ class LeadAndOcclusion:
     road_reference: float  # grey level of the road just ahead
     obstacle: Obstacle | None = None  # anything standing in the ego lane (needs the camera's mounting height)
     searched_m: float = 0.0  # [m] how far ahead the object search looked along the lane (0: it did not run)
+    stop_line_m: float | None = None  # [m] a painted band across the ego lane (vision/obstacle.py: search_lane)
 
 
 def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
@@ -266,17 +268,19 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     road = trackers.road.reference(measured)
     occ = occlusion(p.gray, hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface, curves=lanes.expected)
     trackers.road.learn(measured, occ)
-    obstacle, searched_m = None, 0.0
+    obstacle, searched_m, stop_line_m = None, 0.0, None
     # a range needs the mounting height (without it the search is skipped). The bending lane model searches its own
     # interior, round the curve (the straight chords between its boundaries cut across the verge there), and on the
     # tiled floors it serves a smoother tile is no object
     if p.camera.mount_height_m is not None and (lanes.ground is None or lanes.interior is not None):
         searched_m = search_depth_m(p.camera, p.region, p.scale)
-        obstacle = detect_obstacle(surface, road, p.region, expected_l, expected_r, p.camera, p.scale, interior=lanes.interior,
-                                   smooth_objects=lanes.ground is None, edge_paint=lanes.white)
+        found_in_lane = search_lane(surface, road, p.region, expected_l, expected_r, p.camera, p.scale, interior=lanes.interior,
+                                    smooth_objects=lanes.ground is None, edge_paint=lanes.white)
+        obstacle, stop_line_m = found_in_lane.obstacle, found_in_lane.stop_line_m
     obstacle = trackers.obstacles.update(obstacle)
     lead = lead_from_box(box, p.camera) if box is not None else None
-    return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference, obstacle=obstacle, searched_m=searched_m)
+    return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference, obstacle=obstacle, searched_m=searched_m,
+                            stop_line_m=stop_line_m)
 
 
 SEARCH_DEPTH_MAX_M = 50.0  # [m] the object search vouches for no more than this (a far row's pixels are a few centimetres of
@@ -344,7 +348,8 @@ def _analyze(
         lane_confidence=confidence, brightness=p.exposure.brightness, occlusion=seen.occlusion, lead=seen.lead,
         qr_payloads=payloads, steering_deg=steering, exposure=p.exposure, evidence=evidence, left=lanes.left,
         right=lanes.right, region=p.region, scale=p.scale, lead_box=seen.box, road_reference=seen.road_reference,
-        reasons=reasons, timings_ms=timings, obstacle=seen.obstacle, searched_m=seen.searched_m, ground=lanes.ground,
+        reasons=reasons, timings_ms=timings, obstacle=seen.obstacle, searched_m=seen.searched_m, stop_line_m=seen.stop_line_m,
+        ground=lanes.ground,
         curves_px=None if lanes.curves_px is None else tuple(c * p.scale if c is not None else None for c in lanes.curves_px),
         t_s=t_s,
         horizon_v_px=assumed_horizon_v_px(p.bgr.shape[1], p.bgr.shape[0], p.camera),

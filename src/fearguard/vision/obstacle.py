@@ -85,15 +85,33 @@ def foreign_mask(maps: SurfaceMaps, road: RoadAppearance, columns: slice = slice
     return foreign
 
 
+@dataclass(frozen=True)
+class LaneSearch:
+    """What the search of the ego lane found: the nearest object, and the nearest band of paint across the lane."""
+
+    obstacle: Obstacle | None
+    stop_line_m: float | None = None  # [m] ground range to the near edge of a painted band across the lane (a stop line)
+
+
 def detect_obstacle(
     maps: SurfaceMaps, road: RoadAppearance, region: RoadRegion, left: LaneLine, right: LaneLine, camera: CameraModel,
     scale: float, *, interior: np.ndarray | None = None, smooth_objects: bool = True, edge_paint: np.ndarray | None = None,
 ) -> Obstacle | None:
-    """The nearest object in the ego lane of a working image (None when the lane interior looks like road).
+    """The nearest object in the ego lane of a working image (None when the lane interior looks like road)."""
+    return search_lane(maps, road, region, left, right, camera, scale, interior=interior, smooth_objects=smooth_objects,
+                       edge_paint=edge_paint).obstacle
+
+
+def search_lane(
+    maps: SurfaceMaps, road: RoadAppearance, region: RoadRegion, left: LaneLine, right: LaneLine, camera: CameraModel,
+    scale: float, *, interior: np.ndarray | None = None, smooth_objects: bool = True, edge_paint: np.ndarray | None = None,
+) -> LaneSearch:
+    """The nearest object in the ego lane of a working image, and the nearest stop line (a painted band across it).
 
     The interior lies between the straight boundaries, inset by INSET of the lane width — or, when the lane model bends,
     is given: ``interior``, bool over the road rows (``ground_lanes.lane_interior``). ``smooth_objects``: see
     ``foreign_mask``."""
+    line_m: float | None = None
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
     if interior is None:
         a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
@@ -118,12 +136,15 @@ def detect_obstacle(
         bottom = _lowest_stretch_end(hit, MIN_ROWS)
         for _ in range(EDGE_PASSES):  # painted bands across the lane are skipped: the search goes on beyond them
             band_top = None if bottom is None else _painted_band(hit, count, width, bottom, rows, camera, scale)
-            if band_top is None:
+            if band_top is None or bottom is None:
                 break
+            band = maps.grey[band_top : bottom + 1, c0:c1][foreign[band_top : bottom + 1]]
+            if line_m is None and band.size and float(band.mean()) > road.grey:  # paint is brighter than the road; a shadow is not
+                line_m = camera.ground_range_m((rows[bottom] + 1.0) * scale)
             hit[band_top : bottom + 1] = False
             bottom = _lowest_stretch_end(hit, MIN_ROWS)
         if bottom is None:
-            return None
+            return LaneSearch(None, line_m)
         if interior is None or k == EDGE_PASSES:
             break
         edge = _edge_runs(maps, every, interior, edge_paint, hit, bottom, (c0, c1), camera, scale)
@@ -134,8 +155,8 @@ def detect_obstacle(
     v_frame = (rows[bottom] + 1.0) * scale  # the object stands on the lower edge of its lowest row
     u_left, u_right = u.min() * scale, (u.max() + 1.0) * scale
     range_m = camera.ground_range_m(v_frame)
-    return Obstacle(float(u_left), float(u_right), float(v_frame), camera.bearing_deg(0.5 * (u_left + u_right)),
-                    range_m if range_m is not None and math.isfinite(range_m) else None)
+    return LaneSearch(Obstacle(float(u_left), float(u_right), float(v_frame), camera.bearing_deg(0.5 * (u_left + u_right)),
+                               range_m if range_m is not None and math.isfinite(range_m) else None), line_m)
 
 
 def _edge_runs(

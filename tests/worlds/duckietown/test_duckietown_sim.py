@@ -229,3 +229,16 @@ def test_a_red_stop_line_across_the_lane_is_paint_not_an_object(town: str, start
     finally:
         w.close()
     assert seen and all(o is None for o in seen), [o for o in seen if o is not None][:2]
+
+
+def test_at_a_red_stop_line_the_robot_stands_then_crosses_the_intersection(tmp_path: Path) -> None:
+    """Issue 35: ETH_small_intersect's first stop line is 2.6 m in. The robot stands before it (duckiebot rules: 1 s),
+    then crosses where the tape is missing, as far as its search saw the path clear at the line, and drives on."""
+    s = drive(DriveOptions("ETH_small_intersect", seconds=22, plots=False), tmp_path).summary
+    rows = [json.loads(line) for line in (tmp_path / "log.jsonl").read_text().splitlines()]
+    served = [r for r in rows if any(x.startswith("stop line: stood") for x in r["reasons"])]
+    assert served, "no stop at the red line"
+    stood_at = served[0]["progress_m"]
+    assert 2.3 <= stood_at <= 2.7 and served[0]["speed_mps"] <= 0.05
+    assert s["progress_m"] >= stood_at + 0.8  # across the intersection and on
+    assert s["departures"] == 0 and s["collisions"] == 0 and s["centre_line_crossings"] == 0
