@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from hypothesis import assume, given
+from hypothesis import assume, example, given
 from hypothesis import strategies as st
 
 from fearguard.sensors.localisation import (
@@ -420,16 +420,18 @@ def test_update_never_raises(t_s, payloads, odometer_m) -> None:
 
 
 @given(st.lists(STEP, min_size=1, max_size=25))
+@example(steps=[(0.0, [marker(0.0)], None), (1.0, [], 0.0), (0.0, [marker(2.0)], None)])  # no reading: the last one holds
 def test_class_decisions_agree_with_the_pure_functions(steps) -> None:
     """Every accept/reject of a lone valid marker is what plausible_fix says (re-localisation aside); staleness likewise."""
     loc, t, odo = QrLocaliser(route="campus"), 0.0, 0.0
-    prev, prev_odo = loc.update(0.0, [], 0.0), 0.0  # the last valid-time state and the odometer given with it
+    prev, prev_odo = loc.update(0.0, [], 0.0), 0.0  # the last valid-time state and the odometer the localiser had with it
     for dt, payloads, dodo in steps:
         valid_time = not math.isnan(dt) and dt >= 0
         t_in = t + dt if valid_time else (math.nan if math.isnan(dt) else t + dt)
         odo_in = None if dodo is None or math.isnan(dodo) else odo + dodo
-        odo = odo if odo_in is None else odo_in
+        odo = odo if odo_in is None else odo_in  # without a reading the localiser holds the last one (no speed is given)
         s = loc.update(t_in, payloads, odo_in)
+        odo_in = odo
         if not valid_time:
             assert s.staleness_s == prev.staleness_s and s.fix_t_s == prev.fix_t_s
             continue
