@@ -45,7 +45,8 @@ def test_values_moved_to_observation_keep_their_old_import_paths() -> None:
 
 
 def test_design_contract_signatures() -> None:
-    assert fg.CUE_NAMES == ("lane_confidence", "brightness", "occlusion", "obstacle_range_m", "qr_staleness_s")
+    assert fg.CUE_NAMES == ("lane_confidence", "brightness", "occlusion", "obstacle_range_m", "qr_staleness_s", "familiarity")
+    assert fg.Cues(0.9, 120.0, 0.0, 3.0, 0.5).familiarity == 1.0  # five fields: a car without a track profile
     assert [f.name for f in dataclasses.fields(fg.Cues)] == list(fg.CUE_NAMES)
     assert [level.value for level in fg.FearLevel] == [0, 1, 2, 3, 4] and fg.FearLevel.VERY_HIGH.name == "VERY_HIGH"
     assert {m.name for m in fg.Mode} == {"NORMAL", "CAUTION", "EMERGENCY"}

@@ -1,4 +1,8 @@
-"""The five risk cues: names, units, physical ranges and their worst values.
+"""The risk cues: names, units, physical ranges and their worst values.
+
+Five are measured on every car; the sixth, ``familiarity``, exists only with a learnt track profile
+(``fearguard learn``, docs/learning.md): a car without one has no such cue, and it reads 1 (like the recordings,
+calm), as QR staleness reads 0 on a car without QR localisation.
 
 A cue that is NaN, outside its physical range, or not a number is *unknown*, and unknown is the
 worst case (docs/architecture.md, invariant 4). This module is the one place that decides what unknown means;
@@ -22,6 +26,7 @@ CUE_NAMES: tuple[str, ...] = (
     "occlusion",
     "obstacle_range_m",
     "qr_staleness_s",
+    "familiarity",
 )
 
 
@@ -59,11 +64,14 @@ CUE_SPECS: tuple[CueSpec, ...] = (
     CueSpec("occlusion", 0.0, 1.0, Worsens.WHEN_HIGHER, 1.0, unit="share hidden 0..1", calm=0.0, panel="share"),
     CueSpec("obstacle_range_m", 0.0, math.inf, Worsens.WHEN_LOWER, 0.0, unit="m", calm=math.inf, span=10.0, panel="range"),
     CueSpec("qr_staleness_s", 0.0, math.inf, Worsens.WHEN_HIGHER, math.inf, unit="s", calm=0.0, span=40.0, panel="staleness"),
+    CueSpec("familiarity", 0.0, 1.0, Worsens.WHEN_LOWER, 0.0, unit="0..1 like the learnt track", calm=1.0, panel="share"),
 )
 assert tuple(s.name for s in CUE_SPECS) == CUE_NAMES  # one order: the contract of evaluate_batch
 BRIGHTNESS = CUE_NAMES.index("brightness")
 OBSTACLE_RANGE = CUE_NAMES.index("obstacle_range_m")
 QR_STALENESS = CUE_NAMES.index("qr_staleness_s")
+FAMILIARITY = CUE_NAMES.index("familiarity")
+MEASURED_CUES = FAMILIARITY  # the five cues every car has come first: an (N, 5) batch is a car without a track profile
 _LOWS = [s.low for s in CUE_SPECS]
 _HIGHS = [s.high for s in CUE_SPECS]
 _LOW = np.array(_LOWS)
@@ -74,13 +82,17 @@ _WORST = np.array([s.worst if s.worst is not None else np.nan for s in CUE_SPECS
 
 @dataclass(frozen=True)
 class Cues:
-    """One frame's cues in their physical units; any field may be NaN (= unknown = worst)."""
+    """One frame's cues in their physical units; any field may be NaN (= unknown = worst).
+
+    ``familiarity`` defaults to 1.0 (like the learnt track): the five-field ``Cues(...)`` of a car without a track
+    profile, for which the cue does not apply."""
 
     lane_confidence: float
     brightness: float
     occlusion: float
     obstacle_range_m: float
     qr_staleness_s: float
+    familiarity: float = 1.0
 
     def values(self) -> list[float]:
         """The cues as floats in CUE_NAMES order; a field that is not a reading (readings.py: text, bytes,

@@ -24,7 +24,7 @@ from fearguard.replay.sources import SourceError, open_source
 from fearguard.sim.scenario import ScenarioError, load_scenario
 
 ALL_SENSORS = fg.VehicleLimits(has_ultrasonic=True, has_qr_localisation=True)
-CALM = (0.9, 120.0, 0.0, 3.0, 0.5)
+CALM = (0.9, 120.0, 0.0, 3.0, 0.5, 1.0)
 SCENARIO = Path(__file__).resolve().parents[2] / "src" / "fearguard" / "scenarios" / "clear_straight.toml"
 
 
@@ -64,7 +64,7 @@ def test_text_infinity_at_the_obstacle_range_does_not_clear_the_road() -> None:
 
 
 def test_a_fraction_and_numpy_scalars_are_readings() -> None:
-    assert fg.Cues(Fraction(9, 10), np.float32(120.0), np.int64(0), 3, 0.5).values() == pytest.approx([0.9, 120.0, 0.0, 3.0, 0.5])
+    assert fg.Cues(Fraction(9, 10), np.float32(120.0), np.int64(0), 3, 0.5).values() == pytest.approx([0.9, 120.0, 0.0, 3.0, 0.5, 1.0])
 
 
 # -- 3: rule bases that can never reach EMERGENCY, or never calm down ----------------------------

@@ -186,7 +186,8 @@ def test_unknown_values_are_unknown_to_the_supervisor(item) -> None:
     name, value = item
     cues = fg.Cues(**{**{n: 0.5 for n in CUE_NAMES}, name: value})
     v = cues.values()[CUE_NAMES.index(name)]
-    assert math.isnan(v) or v < 0 or (name in ("lane_confidence", "occlusion") and v > 1) or (name == "brightness" and v > 255)
+    shares = ("lane_confidence", "occlusion", "familiarity")
+    assert math.isnan(v) or v < 0 or (name in shares and v > 1) or (name == "brightness" and v > 255)
 
 
 def test_frames_rebuild_byte_for_byte_and_refill_one_buffer() -> None:

@@ -10,6 +10,7 @@ promises (docs/architecture.md, invariant 11):
 | ``brightness`` (0 and 255) | at least CAUTION (darkness or glare: slow down) | at least CAUTION |
 | ``obstacle_range_m`` | EMERGENCY STOP, collision cause (also the cores of terms named ``imminent``/``near``) | at least CAUTION |
 | ``qr_staleness_s`` | EMERGENCY CRAWL, localisation cause | at least CAUTION |
+| ``familiarity`` (with a track profile) | at least CAUTION (unlike the recordings: slow down) | at least CAUTION |
 
 *Worst term*: the term with the highest membership at the cue's worst value. The *edge of its core* is its least bad
 value with membership 1; *half-way* is where its membership has fallen to 0.5 toward calm (the crossover with the
@@ -37,7 +38,7 @@ HALF = 0.5  # [-] membership at the crossover: half-way into the worst term
 
 CUE_CAUSE = {  # the hazard each cue grades: it picks the strategy
     "lane_confidence": Cause.ROAD, "brightness": Cause.ROAD, "occlusion": Cause.ROAD,
-    "obstacle_range_m": Cause.COLLISION, "qr_staleness_s": Cause.LOCALISATION,
+    "obstacle_range_m": Cause.COLLISION, "qr_staleness_s": Cause.LOCALISATION, "familiarity": Cause.ROAD,
 }
 
 
@@ -57,6 +58,7 @@ class Response(Enum):
 WORST_RESPONSE = {
     "lane_confidence": Response.ROAD_EMERGENCY, "occlusion": Response.ROAD_EMERGENCY, "brightness": Response.CAUTION,
     "obstacle_range_m": Response.COLLISION_STOP, "qr_staleness_s": Response.LOCALISATION_CRAWL,
+    "familiarity": Response.CAUTION,  # unlike anything learnt: slow down (the rules may ask more; the design promises this)
 }
 
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from fearguard.cues import BRIGHTNESS, CUE_NAMES, Cues, unknown_mask, with_worst
+from fearguard.cues import BRIGHTNESS, CUE_NAMES, CUE_SPECS, MEASURED_CUES, Cues, unknown_mask, with_worst
 from fearguard.fear import FearLevel, FearResult
 from fearguard.fuzzy.engine import Engine
 from fearguard.fuzzy.model import Group, Rule, RuleSet, Variable
@@ -74,18 +74,17 @@ class RuleBase:
 
     def evaluate(self, cues: Cues | Sequence[float] | np.ndarray) -> FearResult:
         """Fear of one cue vector, with the rules that fired; unknown cues count as their worst."""
-        x = cues.values() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(len(CUE_NAMES)).tolist()
+        x = cues.values() if isinstance(cues, Cues) else full_width(np.asarray(cues, dtype=float).reshape(1, -1))[0].tolist()
         return self._engine.evaluate(x)
 
     def evaluate_batch(self, x: np.ndarray) -> np.ndarray:
-        """Fear of N cue vectors, x: (N, 5) in CUE_NAMES order → (N,)."""
+        """Fear of N cue vectors, x: (N, 5) or (N, 6) in CUE_NAMES order → (N,). Five columns: a car without a track
+        profile (familiarity does not apply)."""
         return self.group_fears_batch(x).max(axis=1)
 
     def group_fears_batch(self, x: np.ndarray) -> np.ndarray:
-        """Each group's fear for N cue vectors: (N, 5) → (N, n_groups); unknown = worst."""
-        x = np.asarray(x, dtype=float)
-        if x.ndim != 2 or x.shape[1] != len(CUE_NAMES):
-            raise ValueError(f"evaluate_batch needs an array of shape (N, 5) in the order {CUE_NAMES}, got {x.shape}")
+        """Each group's fear for N cue vectors: (N, 5 or 6) → (N, n_groups); unknown = worst."""
+        x = full_width(np.asarray(x, dtype=float))
         dark = self._engine.group_fears_batch(with_worst(x, 0.0))
         unknown_b = unknown_mask(x)[:, BRIGHTNESS]
         if unknown_b.any():
@@ -101,5 +100,17 @@ class RuleBase:
 
         if self._reference is None:
             self._reference = Reference(self.model)
-        x = cues.as_array() if isinstance(cues, Cues) else np.asarray(cues, dtype=float).reshape(len(CUE_NAMES))
+        x = cues.as_array() if isinstance(cues, Cues) else full_width(np.asarray(cues, dtype=float).reshape(1, -1))[0]
         return self._reference.fear(x)
+
+
+def full_width(x: np.ndarray) -> np.ndarray:
+    """Cue vectors (N, 5) or (N, 6) → (N, 6): five columns are a car without a track profile, whose familiarity is
+    calm (the cue does not apply). Any other shape is a ValueError naming the order."""
+    if x.ndim != 2 or x.shape[1] not in (MEASURED_CUES, len(CUE_NAMES)):
+        raise ValueError(f"evaluate_batch needs an array of shape (N, {MEASURED_CUES}) or (N, {len(CUE_NAMES)}) in the "
+                         f"order {CUE_NAMES}, got {x.shape}")
+    if x.shape[1] == len(CUE_NAMES):
+        return x
+    calm = np.array([s.calm for s in CUE_SPECS[MEASURED_CUES:]], dtype=float)
+    return np.hstack([x, np.broadcast_to(calm, (x.shape[0], calm.size))])

@@ -10,7 +10,7 @@ matplotlib.use("Agg")  # files only: no screen on the cars and CI machines this 
 import matplotlib.pyplot as plt
 import numpy as np
 
-from fearguard.cues import CUE_NAMES, CUE_SPECS
+from fearguard.cues import CUE_NAMES, CUE_SPECS, calm_values
 from fearguard.fuzzy.rulebase import RuleBase
 
 UNITS = {**{spec.name: spec.unit for spec in CUE_SPECS}, "fear": "0..1"}
@@ -29,7 +29,7 @@ def _thresholds(ax: plt.Axes, rb: RuleBase, horizontal: bool = True) -> None:
 
 def _best_cues(rb: RuleBase) -> np.ndarray:
     """A calm reference point: every cue at its least fearful value."""
-    return np.array([1.0, sum(rb.brightness_band) / 2.0, 0.0, np.inf, 0.0])
+    return np.array(calm_values(rb.brightness_band))
 
 
 def plot_rules(rb: RuleBase, out_dir: str | Path) -> list[Path]:
