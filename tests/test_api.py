@@ -13,7 +13,8 @@ import fearguard as fg
 
 
 def test_public_names_are_exported_explicitly() -> None:
-    expected = {"CUE_NAMES", "CameraModel", "Cause", "Command", "Cues", "FearGuard", "FearLevel", "FearResult",
+    expected = {"TrackProfile", "load_track",
+                "CUE_NAMES", "CameraModel", "Cause", "Command", "Cues", "FearGuard", "FearLevel", "FearResult",
                 "FearguardError", "FrameAnalysis", "FrameSteering", "GroundLaneSpec", "HoughLaneSteering", "Lead", "LeadBox",
                 "Mode", "Observation",
                 "PolicyConfig", "RuleBase", "RuleError", "Strategy", "VehicleLimits", "analyze_frame", "load_camera",

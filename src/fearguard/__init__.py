@@ -23,6 +23,7 @@ if TYPE_CHECKING:
     from fearguard.perception import FrameSteering
     from fearguard.policy import Mode, PolicyConfig, Strategy
     from fearguard.supervisor import Command, FearGuard
+    from fearguard.track.profile import TrackProfile, load_track
     from fearguard.vehicle import VehicleLimits
     from fearguard.vision.frame import FrameAnalysis, analyze_frame
     from fearguard.vision.lane_steering import HoughLaneSteering
@@ -49,6 +50,8 @@ _HOME = {  # public name → the module that defines it
     "Strategy": "fearguard.policy",
     "Command": "fearguard.supervisor",
     "FearGuard": "fearguard.supervisor",
+    "TrackProfile": "fearguard.track.profile",
+    "load_track": "fearguard.track.profile",
     "VehicleLimits": "fearguard.vehicle",
     "FrameAnalysis": "fearguard.vision.frame",
     "GroundLaneSpec": "fearguard.vision.ground_lanes",
@@ -79,10 +82,12 @@ __all__ = [
     "RuleBase",
     "RuleError",
     "Strategy",
+    "TrackProfile",
     "VehicleLimits",
     "analyze_frame",
     "load_camera",
     "load_rules",
+    "load_track",
     "save_camera",
 ]
 

@@ -310,7 +310,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
         rules=args.rules, camera=args.camera, sensor_log=args.sensor_log, strict=args.strict, no_ultrasonic=args.no_ultrasonic,
         qr_localisation=args.qr_localisation, speed_mps=args.speed_mps, fps=args.fps, start=args.from_, stop=args.to,
         every=args.every, video=args.video, plots=not args.no_plots, vehicle=resolve_vehicle(args.vehicle), steer=steer,
-        mcap=args.mcap, topics=BagTopics(args.image_topic, args.range_topic, args.speed_topic, args.qr_topic),
+        mcap=args.mcap, topics=BagTopics(args.image_topic, args.range_topic, args.speed_topic, args.qr_topic), track=args.track,
     )
     out = args.out or _new_out("replay", args.recording.rstrip("/\\"))
     with _Progress("replay") as progress:
@@ -342,7 +342,7 @@ def _replay_fleet(args: argparse.Namespace) -> int:
     options = {"rules": args.rules, "camera": args.camera, "strict": args.strict, "no_ultrasonic": args.no_ultrasonic,
                "qr_localisation": args.qr_localisation, "speed_mps": args.speed_mps, "fps": args.fps, "start": args.from_,
                "stop": args.to, "every": args.every, "video": args.video, "plots": not args.no_plots, "mcap": args.mcap,
-               "vehicle": args.vehicle, "steer": args.steer,
+               "vehicle": args.vehicle, "steer": args.steer, "track": args.track,
                "topics": {"image": args.image_topic, "range": args.range_topic, "speed": args.speed_topic, "qr": args.qr_topic}}
     specs = fleet.plan(args.recordings, out, options)
     print(f"replay: {len(specs)} recordings → {out}{_on(executor)}", file=sys.stderr)
@@ -412,6 +412,34 @@ def _print_replay_summary(summary: dict, out_dir: object) -> None:
 
 def _by(summary: dict) -> str:
     return f" by {summary['stopped_by']}" if summary.get("stopped_by") else ""
+
+
+def cmd_learn(args: argparse.Namespace) -> int:
+    """Recordings of normal driving → a track profile (.npz) and track.png beside it; prints what it learnt."""
+    from fearguard.camera import load_camera
+    from fearguard.track.learn import LearnOptions, learn_track
+    from fearguard.track.picture import draw_track
+    from fearguard.track.profile import save_track
+
+    options = LearnOptions(fps=args.fps, start=args.from_, stop=args.to, every=args.every,
+                           camera=load_camera(args.camera) if args.camera else None)
+    with _Progress("learn") as progress:
+        learnt = learn_track(args.recordings, options, on_frame=lambda n: progress.update(n, None))
+    out = save_track(learnt.profile, args.out)
+    picture = draw_track(learnt, out.with_suffix(".png"))
+    p = learnt.profile
+    colours = ", ".join(f"BGR {tuple(int(v) for v in c)}" for c in p.marking_colours_bgr) or "none seen in most frames"
+    lane = ("the camera's lane model sees this track" if p.lane_confidence_median >= 0.5 else
+            "the camera's lane model does not see this track's guidance: the lane cue will read familiarity")
+    print(f"learnt {p.frames_learnt} frames of {learnt.frames_read} read ({learnt.frames_standing} with the car standing or "
+          f"backing left out, {learnt.skipped} unreadable)")
+    print(f"  light: brightness band {p.brightness_band[0]:.0f}–{p.brightness_band[1]:.0f} (2nd–98th percentile)")
+    print(f"  lane: median confidence {p.lane_confidence_median:.2f} on the recordings: {lane}")
+    print(f"  markings: {colours}")
+    print(f"  familiarity: {p.bank.shape[0]} frames kept, {p.basis.shape[0]} components, reference distance "
+          f"{p.reference_distance:.3f}")
+    print(f"wrote {out} and {picture}")
+    return 0
 
 
 def cmd_run(args: argparse.Namespace) -> int:
@@ -871,6 +899,7 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--strict", action="store_true", help="reject a sensor log with any malformed line (default: report and skip)")
     rp.add_argument("--camera", default=None, help="camera.toml from `fearguard calibrate`")
     rp.add_argument("--rules", default=None, help="rule file (default: the bundled model-car rules)")
+    rp.add_argument("--track", default=None, help="track profile from `fearguard learn` (adds the familiarity cue)")
     rp.add_argument("--no-ultrasonic", action="store_true", help="the car has no ultrasonic (even if the log has a column)")
     rp.add_argument("--qr-localisation", action="store_true", help="the car localises with QR markers (scan frames, staleness cue)")
     rp.add_argument("--speed-mps", type=_number(0.0), default=None, help="the recording's speed when the log has none (default: unknown)")
@@ -889,6 +918,16 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--resume", action="store_true", help="a fleet: skip the recordings already in OUT/runs.jsonl")
     _batch_options(rp, "recordings")
     rp.set_defaults(func=cmd_replay)
+    lp = sub.add_parser("learn", help="recordings of normal driving → a track profile: the familiarity cue, the light and the lane "
+                        "as this track has them (docs/learning.md)")
+    lp.add_argument("recordings", nargs="+", metavar="recording", help="video file, folder of images, Donkey Car tub or ROS bag")
+    lp.add_argument("--out", required=True, help="the profile to write (.npz); track.png is drawn beside it")
+    lp.add_argument("--camera", default=None, help="camera.toml from `fearguard calibrate` (the lane model's camera)")
+    lp.add_argument("--fps", type=_number(above=0.0), default=None, help="frame rate of an image folder (or to override a video's)")
+    lp.add_argument("--from", dest="from_", type=_position, default=None, help="start: seconds ('12.5s') or a frame ('300f')")
+    lp.add_argument("--to", type=_position, default=None, help="end (exclusive): seconds or a frame")
+    lp.add_argument("--every", type=_count(1), default=1, help="learn every N-th frame (N >= 1)")
+    lp.set_defaults(func=cmd_learn)
     run = sub.add_parser("run", help="one scenario closed loop: rendered frames → perception → supervisor → car")
     run.add_argument("scenario", help="a bundled scenario's name (e.g. night; `fearguard scenarios` lists them) or a scenario file")
     run.add_argument("--seed", type=_count(0), default=None, help="random seed >= 0 (default: the scenario's)")

@@ -15,6 +15,7 @@ import statistics
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 from fearguard.camera import CameraModel
@@ -63,6 +64,7 @@ from fearguard.policy.lane_check import LaneCheck, lane_check
 from fearguard.policy.stop_line import StopLine, next_stop_line
 from fearguard.readings import finite_reading
 from fearguard.steering_deadline import SteeringDeadline
+from fearguard.track.profile import TrackProfile, load_track
 from fearguard.vehicle import VehicleLimits
 
 SteeringFunction = Callable[[Any], float]
@@ -120,6 +122,10 @@ class FearGuard:
     ``steering_deadline_s`` (off by default): the steering function runs in a worker thread and an
     answer later than this counts as a fault. It trades determinism for timeliness — whether a slow
     answer makes the deadline depends on the machine's load — so replays and tests leave it off.
+
+    ``track`` (a ``TrackProfile`` or the path of one written by ``fearguard learn``): each frame is also read against
+    the car's own recordings — the familiarity cue, and the light and lane as this track has them (docs/learning.md).
+    Without one the familiarity cue does not apply (1); given ``Cues`` always count as given.
     """
 
     def __init__(
@@ -129,13 +135,15 @@ class FearGuard:
         vehicle: VehicleLimits | None = None,
         camera: CameraModel | None = None,
         steering_deadline_s: float | None = None,
+        track: TrackProfile | str | Path | None = None,
     ) -> None:
         self.steer = steer
         self.rules = rules if isinstance(rules, RuleBase) else load_rules(rules)
         self.vehicle = vehicle if vehicle is not None else VehicleLimits()
         self._frame_steering = steer if isinstance(steer, FrameSteering) else None
         shared = self._frame_steering.pipeline if self._frame_steering is not None else None
-        self.perception = Perception(self.vehicle, camera, shared)
+        self.track = load_track(track) if isinstance(track, str | Path) else track
+        self.perception = Perception(self.vehicle, camera, shared, track=self.track, normal_band=self.rules.brightness_band)
         self.camera = self.perception.camera
         self._deadline = SteeringDeadline(steering_deadline_s) if steering_deadline_s is not None else None
         self._state = _State()

@@ -15,12 +15,14 @@ DOC = Path(__file__).resolve().parents[2] / "docs" / "architecture.md"
 FLOORS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("plain values", ("fearguard.errors", "fearguard.readings", "fearguard.cues", "fearguard.fear", "fearguard.observation",
                       "fearguard.lane", "fearguard.camera", "fearguard.vehicle", "fearguard.files.")),
-    ("measurement", ("fearguard.vision.", "fearguard.sensors.")),
+    ("measurement", ("fearguard.vision.", "fearguard.sensors.", "fearguard.track", "fearguard.track.features",
+                     "fearguard.track.profile", "fearguard.track.reading")),
     ("perception", ("fearguard.perception",)),
     ("fear and policy", ("fearguard.fuzzy.", "fearguard.policy.", "fearguard.policy")),
     ("supervisor", ("fearguard.supervisor", "fearguard.steering_deadline")),
     ("drivers and outputs", ("fearguard.drive.", "fearguard.outputs.", "fearguard.sim.", "fearguard.replay.", "fearguard.worlds.",
-                             "fearguard.integrations.", "fearguard.testing.", "fearguard.cli", "fearguard.demo", "fearguard")),
+                             "fearguard.integrations.", "fearguard.testing.", "fearguard.cli", "fearguard.demo", "fearguard",
+                             "fearguard.track.learn", "fearguard.track.picture")),
 )
 
 

@@ -295,3 +295,79 @@ def test_tfmini_box_ahead_the_car_stops_before_it(shared_data, tmp_path, cfg):
     assert top > 0.5, "the car drove toward the box"
     assert x_end < box_x_m - 0.05, "the car stopped before the box"
     assert v_end < 0.05
+
+
+TUB = "modelcar/donkey-carpet-dark"  # a real Donkey tub v2 (dark carpet, tape edges), 2526 records at 20 Hz
+
+
+class TubCamera(BaseCamera):
+    """A threaded camera part playing a tub's images from record ``start`` at 20 Hz (RGB, as a Pi camera gives), and
+    the driver's recorded angle and throttle with each frame (what the pilot would have said)."""
+
+    def __init__(self, tub_path: Path, start: int, fps: float = 20.0) -> None:
+        tub = Tub(str(tub_path), read_only=True)
+        self.records = [r for r in tub if int(r["_index"]) >= start and "cam/image_array" in r]
+        self.images = tub_path / "images"
+        self.period_s = 1.0 / fps
+        self.frame, self.commands = None, (None, None)
+        self.finished = threading.Event()
+        self.on = True
+
+    def update(self) -> None:
+        next_t = time.monotonic()
+        for r in self.records:
+            if not self.on:
+                break
+            bgr = cv2.imread(str(self.images / r["cam/image_array"]))
+            if bgr is not None:
+                self.frame = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+                self.commands = (float(r["user/angle"]), float(r["user/throttle"]))
+            next_t += self.period_s
+            time.sleep(max(0.0, next_t - time.monotonic()))
+        self.finished.set()
+
+    def run_threaded(self) -> tuple:
+        return self.frame, *self.commands
+
+    def shutdown(self) -> None:
+        self.on = False
+
+
+def test_a_learnt_track_lets_the_car_drive_its_own_tub_in_the_real_loop(shared_data, tmp_path, cfg):
+    """Issue 34: `fearguard learn` on the first half of a real tub, FEARGUARD_TRACK in the stock loop replaying the second
+    half at 20 Hz as camera and pilot: the loop keeps its rate, the car keeps (nearly) the pilot's throttle."""
+    from fearguard.track.learn import LearnOptions, learn_track
+    from fearguard.track.profile import save_track
+
+    tub = shared_data / TUB
+    half = len(Tub(str(tub), read_only=True)) // 2
+    track = save_track(learn_track([tub], LearnOptions(stop=f"{half}f")).profile, tmp_path / "track.npz")
+    cfg.FEARGUARD_TRACK = str(track)
+    cfg.FEARGUARD_PRESET = "donkey"
+    vehicle = Vehicle()
+    camera = TubCamera(tub, half)
+    vehicle.add(camera, outputs=["cam/image_array", "pilot/angle", "pilot/throttle"], threaded=True)
+    vehicle.add(EndOfVideo(vehicle, camera))
+    vehicle.add(DriveMode(cfg.AI_THROTTLE_MULT), inputs=["user/mode", "user/angle", "user/throttle", "pilot/angle", "pilot/throttle"],
+                outputs=["steering", "throttle"])
+    part = FearGuardPart.from_cfg(cfg, channels=("steering", "throttle"))
+    timed = Timed(part)
+    vehicle.add(timed, inputs=part.inputs, outputs=part.outputs)
+    recorder = Recorder()
+    vehicle.add(recorder, inputs=["pilot/angle", "pilot/throttle", *part.outputs])
+    vehicle.mem.put(["user/mode", "user/angle", "user/throttle"], ["local", 0.0, 0.0])
+    result = vehicle.start(rate_hz=cfg.DRIVE_LOOP_HZ, max_loop_count=4 * len(camera.records))
+    assert result is not None, "the vehicle loop ended on an exception (see the traceback above)"
+    loops, seconds = result
+    rows = [r for r in recorder.rows if r[1] is not None]
+    modes = [r[5] for r in rows]
+    emergency = modes.count("EMERGENCY") / len(rows)
+    pilot = sum(max(0.0, r[1]) for r in rows)
+    guarded = sum(max(0.0, r[3]) for r in rows)
+    cpu_ms = 1e3 * statistics.median(timed.cpu_s[1:])
+    print(f"\nlearnt track, 2nd half of {TUB}: {loops} loops in {seconds:.1f} s = {loops / seconds:.1f} Hz; EMERGENCY "
+          f"{100 * emergency:.1f} % of loops; throttle {100 * guarded / pilot:.1f} % of the pilot's; part {cpu_ms:.1f} ms CPU "
+          f"(median); modes { {m: modes.count(m) for m in sorted(set(modes))} }")
+    assert emergency <= 0.10
+    assert guarded >= 0.85 * pilot
+    assert cpu_ms <= PART_CPU_SHARE * 1e3 / MIN_LOOP_HZ

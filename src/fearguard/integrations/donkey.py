@@ -105,11 +105,13 @@ class FearGuardPart:
         channels: Sequence[str] = ("pilot/angle", "pilot/throttle"),
         image_channel: str = "cam/image_array",
         clock: Callable[[], float] = time.monotonic,
+        track: Any = None,
     ) -> None:
         if len(channels) != 2:
             raise ValueError(f"channels must be (angle channel, throttle channel), got {channels!r}")
         self.vehicle = vehicle
-        self.guard = FearGuard(None, rules=rules, vehicle=vehicle, camera=camera)  # the pilot's angle comes in each Observation
+        # the pilot's angle comes in each Observation; a track profile (path or TrackProfile) adds the familiarity cue
+        self.guard = FearGuard(None, rules=rules, vehicle=vehicle, camera=camera, track=track)
         self.has_tfmini, self.has_odom = has_tfmini, has_odom
         self.speed_lag_s = speed_lag_s
         self.clock = clock
@@ -133,7 +135,8 @@ class FearGuardPart:
 
         ``FEARGUARD_PRESET`` (a name in ``fearguard.vehicle.PRESETS``, default the camera-only 1:10 car) gives every
         vehicle number; the other FEARGUARD_* keys override it, and the sensors are what the config wires
-        (HAVE_TFMINI, HAVE_ODOM), whatever the preset carries.
+        (HAVE_TFMINI, HAVE_ODOM), whatever the preset carries. ``FEARGUARD_TRACK``: a profile from ``fearguard learn``
+        on this car's tubs (docs/learning.md): the familiarity cue, and the light and lane as this track has them.
         """
         base = _cfg_preset(getattr(cfg, "FEARGUARD_PRESET", None))
         has_tfmini, has_odom = bool(getattr(cfg, "HAVE_TFMINI", False)), bool(getattr(cfg, "HAVE_ODOM", False))
@@ -165,6 +168,7 @@ class FearGuardPart:
             speed_lag_s=_cfg_number(cfg, "FEARGUARD_SPEED_LAG_S", SPEED_LAG_S, "the throttle-to-speed time constant, s"),
             channels=channels,
             clock=clock,
+            track=getattr(cfg, "FEARGUARD_TRACK", None),
         )
 
     # -- the Donkey part protocol --------------------------------------------------------------

@@ -29,7 +29,7 @@ from fearguard.replay.run import ReplayOptions, replay
 from fearguard.vehicle import resolve_vehicle
 
 TOP_CAUSES = 3  # [-] causes named per recording in the table
-PATH_OPTIONS = ("rules", "camera", "vehicle")  # options that may name a file: made absolute for workers elsewhere
+PATH_OPTIONS = ("rules", "camera", "vehicle", "track")  # options that may name a file: made absolute for workers elsewhere
 CONTROLLER = "guarded"  # a replay is the supervisor over a recording: no baseline
 
 

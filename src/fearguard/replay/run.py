@@ -59,6 +59,7 @@ class ReplayOptions:
     read_ahead: bool | None = None  # decode the next frames on another core (read_ahead.py); None: when there is one
     mcap: bool = False  # also write run.mcap for Foxglove (outputs/mcap.py)
     topics: BagTopics = field(default_factory=BagTopics)  # a ROS bag's topics (replay/bags.py); None fields: picked
+    track: str | None = None  # a track profile from `fearguard learn` (None: no familiarity cue)
 
 
 @dataclass(frozen=True)
@@ -88,7 +89,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     has_us = log_data is not None and not options.no_ultrasonic and bool({"ultrasonic_range_m", "echo_s"} & set(log_data.columns))
     vehicle = replace(options.vehicle, has_ultrasonic=has_us, has_qr_localisation=options.qr_localisation)
     steer = options.steer if options.steer is not None else HoughLaneSteering(camera=camera, fps=source.fps)
-    guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera)
+    guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera, track=options.track)
     start = parse_position(options.start, source.fps) if options.start else 0
     stop_at = parse_position(options.stop, source.fps) if options.stop else None
     _check_span(source_path, source.expected_frames, source.fps, start, stop_at, options)

@@ -1,0 +1,73 @@
+"""What a frame looks like, in a few numbers: the features a track profile compares (docs/learning.md).
+
+Pure functions of the pixels. Three blocks, each cheap at any resolution because the frame is first shrunk to
+``THUMB_PX`` by area averaging:
+
+- **layout**: the grey thumbnail itself (``THUMB_PX``), 0..1. Where things are: the course ahead, a wall, a box over
+  the lane, the camera knocked down. Not normalised: darkness moves it as a whole.
+- **colour**: mean and spread of each Lab channel over the lower half (the road or floor ahead), 0..1. A new floor,
+  coloured tape, sodium or blue light.
+- **edges**: the share of the lower half's gradient energy in each of ``ORIENTATIONS`` directions, and the edge
+  density. The track's line directions, the texture of carpet or tarmac, motion blur (few, weak edges).
+
+The blocks are concatenated; the profile weighs them so that each counts about equally (``profile.py``).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+THUMB_PX = (16, 12)  # [px] (width, height) of the layout thumbnail: coarse enough to ignore texture and noise
+WORK_PX = (64, 48)  # [px] the frame is shrunk to this first: every feature costs the same at any camera resolution
+ORIENTATIONS = 8  # [bins] of gradient direction over 0..180 deg
+BLOCKS = ("layout", "colour", "edges")
+BLOCK_SIZES = (THUMB_PX[0] * THUMB_PX[1], 6, ORIENTATIONS + 1)
+EDGE_SCALE = 64.0  # [grey levels / px] a gradient this strong counts as one full edge in the density
+
+
+def as_bgr(frame: object) -> np.ndarray | None:
+    """A frame as a uint8 H×W×3 BGR image, or None when it is not a picture (wrong type, shape, empty)."""
+    if not isinstance(frame, np.ndarray) or frame.dtype.hasobject or frame.ndim not in (2, 3) or frame.size == 0:
+        return None
+    if frame.ndim == 3 and frame.shape[2] not in (1, 3, 4):
+        return None
+    if min(frame.shape[:2]) < 2:
+        return None
+    img = frame
+    if img.dtype != np.uint8:
+        with np.errstate(invalid="ignore", over="ignore"):
+            img = np.nan_to_num(img.astype(np.float64), nan=0.0, posinf=255.0, neginf=0.0).clip(0, 255).astype(np.uint8)
+    if img.ndim == 2 or img.shape[2] == 1:
+        return cv2.cvtColor(np.ascontiguousarray(img.reshape(img.shape[:2])), cv2.COLOR_GRAY2BGR)
+    if img.shape[2] == 4:
+        return cv2.cvtColor(np.ascontiguousarray(img), cv2.COLOR_BGRA2BGR)
+    return np.ascontiguousarray(img)
+
+
+def frame_features(frame: object) -> np.ndarray | None:
+    """The feature vector of one frame (``sum(BLOCK_SIZES)`` floats), or None when the frame is not a picture."""
+    bgr = as_bgr(frame)
+    if bgr is None:
+        return None
+    small = cv2.resize(bgr, WORK_PX, interpolation=cv2.INTER_AREA)
+    grey = cv2.cvtColor(small, cv2.COLOR_BGR2GRAY)
+    layout = cv2.resize(grey, THUMB_PX, interpolation=cv2.INTER_AREA).astype(np.float64).ravel() / 255.0
+    lower = small[WORK_PX[1] // 2:]
+    lab = cv2.cvtColor(lower, cv2.COLOR_BGR2LAB).reshape(-1, 3).astype(np.float64) / 255.0
+    colour = np.concatenate([lab.mean(axis=0), lab.std(axis=0)])
+    g = grey[WORK_PX[1] // 2:].astype(np.float32)
+    gx, gy = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3)
+    mag, ang = cv2.cartToPolar(gx, gy)
+    bins = (np.mod(ang, np.pi) / np.pi * ORIENTATIONS).astype(np.int64).ravel() % ORIENTATIONS
+    energy = np.bincount(bins, weights=mag.ravel().astype(np.float64), minlength=ORIENTATIONS)
+    total = float(energy.sum())
+    shares = energy / total if total > 0 else np.full(ORIENTATIONS, 1.0 / ORIENTATIONS)
+    density = min(1.0, float(mag.mean()) / EDGE_SCALE)
+    return np.concatenate([layout, colour, shares, [density]])
+
+
+def block_slices() -> tuple[slice, ...]:
+    """Where each block sits in the feature vector, in ``BLOCKS`` order."""
+    ends = np.cumsum(BLOCK_SIZES)
+    return tuple(slice(int(e - n), int(e)) for e, n in zip(ends, BLOCK_SIZES, strict=True))

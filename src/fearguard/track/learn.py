@@ -1,0 +1,222 @@
+"""``fearguard learn``: recordings of normal driving → a track profile (docs/learning.md).
+
+The recordings are read as ``replay`` reads them (videos, image folders, Donkey tubs, ROS bags; a tub's deleted
+records and unreadable frames skipped). Frames where the recording says the car stood or backed (a tub's throttle at or
+below ``MOVING_THROTTLE``) are not normal driving and are left out. From the rest it learns:
+
+- the familiarity model (``profile.py``): weighted features, their principal components, a bank of learnt frames
+  and the recordings' own distances for the calibration;
+- the normal light: the ``BAND_PERCENTILES`` of the brightness cue as the camera pipeline measures it;
+- the camera's lane confidence on this track (its median), and the colours of the track's markings.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from fearguard.camera import CameraModel
+from fearguard.errors import FearguardError
+from fearguard.replay.recordings import open_recording
+from fearguard.replay.sources import parse_position
+from fearguard.track.features import frame_features
+from fearguard.track.profile import (
+    BAND_PERCENTILES,
+    CALIBRATION_GAP_S,
+    NEIGHBOURS,
+    TrackProfile,
+    block_weights,
+)
+from fearguard.vision.frame import FramePipeline
+
+COMPONENTS = 24  # principal components kept: enough for a track's few kinds of view, few enough to be fast
+BANK_MAX = 2000  # [frames] learnt frames kept for the comparison (more: thinned evenly; keeps a frame ≤ 1 ms)
+CALIBRATION_MAX = 1000  # [frames] frames whose distances calibrate the cue
+ANALYSED_MAX = 1500  # [frames] frames the camera pipeline measures for the light band and the lane confidence
+MOVING_THROTTLE = 0.05  # [-] a tub frame with throttle at or below this is the car standing or backing: not normal driving
+MIN_FRAMES = 20  # [frames] fewer normal-driving frames than this teach nothing
+MARKING_CLUSTERS = 4  # colour clusters of high-contrast floor pixels tried as markings
+MARKING_PRESENT_SHARE = 0.5  # [-] a cluster seen in at least this share of frames is one of the track's markings
+MARKING_MIN_PIXELS = 0.003  # [-] share of the lower half a cluster needs in a frame to count as seen there
+_THROTTLE_KEYS = ("user_throttle_donkey", "pilot_throttle_donkey")
+
+
+@dataclass(frozen=True)
+class LearnOptions:
+    """Which frames to learn from: the same --fps/--from/--to/--every as replay."""
+
+    fps: float | None = None
+    start: str | None = None
+    stop: str | None = None
+    every: int = 1
+    camera: CameraModel | None = None
+
+
+@dataclass(frozen=True)
+class Learnt:
+    """A profile and how it was learnt (for the printout and the picture)."""
+
+    profile: TrackProfile
+    frames_read: int
+    frames_standing: int  # left out: the car stood or backed
+    skipped: int  # frames the recordings could not give
+    typical_frames: tuple[np.ndarray, ...]  # a few learnt frames, for the picture
+    brightness: np.ndarray  # the brightness cue on the analysed frames
+
+
+@dataclass
+class _Frames:
+    features: list[np.ndarray]
+    recording: list[int]
+    t_s: list[float]
+    brightness: list[float]
+    lane: list[float]
+    marking_pixels: list[np.ndarray]
+    typical: list[np.ndarray]
+
+
+def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnOptions(),
+                on_frame: Callable[[int], None] | None = None) -> Learnt:
+    """Learn a profile from recordings of normal driving (raises ``FearguardError`` when there is too little)."""
+    got = _Frames([], [], [], [], [], [], [])
+    read = standing = skipped = 0
+    for rec_id, path in enumerate(recordings):
+        source = open_recording(path, options.fps)
+        start = parse_position(options.start, source.fps) if options.start else 0
+        stop = parse_position(options.stop, source.fps) if options.stop else None
+        pipeline = FramePipeline(options.camera)
+        total = source.expected_frames
+        stride = max(1, math.ceil((total or ANALYSED_MAX) / options.every / ANALYSED_MAX))
+        for k, frame in enumerate(source.iter_frames(start, stop, options.every)):
+            read += 1
+            if on_frame is not None:
+                on_frame(read)
+            if _standing(frame.log_fields):
+                standing += 1
+                continue
+            f = frame_features(frame.image_bgr)
+            if f is None:
+                skipped += 1
+                continue
+            got.features.append(f)
+            got.recording.append(rec_id)
+            got.t_s.append(frame.t_s)
+            if k % stride == 0:
+                a = pipeline.process(frame.image_bgr, frame.t_s)
+                got.brightness.append(a.brightness)
+                got.lane.append(a.lane_confidence)
+                got.marking_pixels.append(_contrast_pixels(frame.image_bgr))
+                if len(got.typical) < 64:
+                    got.typical.append(frame.image_bgr)
+        skipped += len(source.skipped)
+    if len(got.features) < MIN_FRAMES:
+        raise FearguardError(f"learn: only {len(got.features)} frames of normal driving in {', '.join(map(str, recordings))} "
+                             f"({standing} with the car standing or backing, {skipped} unreadable); at least {MIN_FRAMES} "
+                             f"are needed")
+    profile = _fit(got, ", ".join(str(p) for p in recordings))
+    pick = np.linspace(0, len(got.typical) - 1, min(6, len(got.typical))).astype(int)
+    return Learnt(profile, read, standing, skipped, tuple(got.typical[i] for i in pick), np.array(got.brightness))
+
+
+def _standing(log_fields: object) -> bool:
+    """The recording says the car stood or backed on this frame (a tub's throttle ≤ MOVING_THROTTLE)."""
+    if not hasattr(log_fields, "get"):
+        return False
+    for key in _THROTTLE_KEYS:
+        v = log_fields.get(key)
+        if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v):
+            return v <= MOVING_THROTTLE
+    return False
+
+
+def _fit(got: _Frames, source: str) -> TrackProfile:
+    feats = np.array(got.features)
+    mean = feats.mean(axis=0)
+    weights = block_weights(feats)
+    z = (feats - mean) * weights
+    _, _, vt = np.linalg.svd(z, full_matrices=False)
+    basis = vt[: min(COMPONENTS, vt.shape[0])]
+    partial = TrackProfile(source, len(feats), mean, weights, basis, np.zeros((1, basis.shape[0] + 1)), np.ones(1),
+                           (0.0, 255.0), math.nan)
+    embedded = partial.embed(feats)
+    keep = np.unique(np.linspace(0, len(feats) - 1, min(BANK_MAX, len(feats))).astype(int))
+    bank = embedded[keep]
+    calib = _calibration(embedded, keep, np.array(got.recording), np.array(got.t_s))
+    b = np.array([x for x in got.brightness if math.isfinite(x)])
+    band = tuple(float(v) for v in np.percentile(b, BAND_PERCENTILES)) if b.size else (0.0, 255.0)
+    lanes = np.array([x for x in got.lane if math.isfinite(x)])
+    return TrackProfile(
+        source=source, frames_learnt=len(feats), mean=mean, weights=weights, basis=basis, bank=bank,
+        calibration_distances=np.sort(calib), brightness_band=(band[0], band[1]),
+        lane_confidence_median=float(np.median(lanes)) if lanes.size else math.nan,
+        marking_colours_bgr=_marking_colours(got.marking_pixels),
+    )
+
+
+def _calibration(embedded: np.ndarray, keep: np.ndarray, recording: np.ndarray, t_s: np.ndarray) -> np.ndarray:
+    """Each calibration frame's mean distance to its NEIGHBOURS nearest bank frames that are not its neighbours in
+    time (another recording, or more than the gap away). The gap shrinks for a recording too short to leave any."""
+    n = len(embedded)
+    span = float(np.ptp(t_s)) if n > 1 and np.all(np.isfinite(t_s)) else 0.0
+    gap = min(CALIBRATION_GAP_S, span / 4.0)
+    idx = np.unique(np.linspace(0, n - 1, min(CALIBRATION_MAX, n)).astype(int))
+    bank, bank_rec, bank_t = embedded[keep], recording[keep], t_s[keep]
+    out = np.empty(idx.size)
+    for j, i in enumerate(idx):
+        d2 = np.einsum("ij,ij->i", bank - embedded[i], bank - embedded[i])
+        near = (bank_rec == recording[i]) & (np.abs(bank_t - t_s[i]) <= gap)
+        near |= (keep == i)
+        d2 = d2[~near]
+        if d2.size == 0:
+            out[j] = 0.0
+            continue
+        k = min(NEIGHBOURS, d2.size)
+        out[j] = float(np.sqrt(np.partition(d2, k - 1)[:k]).mean())
+    return out
+
+
+def _contrast_pixels(bgr: np.ndarray, samples: int = 200) -> np.ndarray:
+    """Colours (BGR) of a sample of the lower half's pixels that stand out from their surroundings (marking candidates),
+    plus the share of the lower half they cover in the last row of the result."""
+    small = cv2.resize(bgr, (160, 120), interpolation=cv2.INTER_AREA)[60:]
+    lab = cv2.cvtColor(small, cv2.COLOR_BGR2LAB).astype(np.float32)
+    local = cv2.blur(lab, (15, 15))
+    contrast = np.sqrt(((lab - local) ** 2).sum(axis=2))
+    ys, xs = np.nonzero(contrast > 25.0)
+    share = ys.size / contrast.size
+    rng = np.random.default_rng(ys.size)
+    pick = rng.choice(ys.size, size=min(samples, ys.size), replace=False) if ys.size else np.zeros(0, dtype=int)
+    colours = small[ys[pick], xs[pick]].astype(np.float32)
+    return np.vstack([colours, [[share, share, share]]])
+
+
+def _marking_colours(samples: list[np.ndarray]) -> np.ndarray:
+    """The typical colours of high-contrast floor pixels seen in at least MARKING_PRESENT_SHARE of the frames."""
+    per_frame = [s[:-1] for s in samples if len(s) > 1]
+    if len(per_frame) < 3:
+        return np.zeros((0, 3))
+    allpx = np.vstack(per_frame).astype(np.float32)
+    k = min(MARKING_CLUSTERS, len(allpx))
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 20, 1.0)
+    cv2.setRNGSeed(0)
+    _, labels, centres = cv2.kmeans(allpx, k, None, criteria, 3, cv2.KMEANS_PP_CENTERS)
+    labels = labels.ravel()
+    seen = np.zeros(k)
+    start = 0
+    for s in samples:
+        n = len(s) - 1
+        if n <= 0:
+            continue
+        lab = labels[start:start + n]
+        start += n
+        share = float(s[-1, 0])
+        for c in range(k):
+            if share * (lab == c).mean() >= MARKING_MIN_PIXELS:
+                seen[c] += 1
+    present = seen / len(samples) >= MARKING_PRESENT_SHARE
+    return centres[present].astype(np.float64)

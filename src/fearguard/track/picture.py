@@ -1,0 +1,60 @@
+"""track.png: one page that shows what a profile learnt — typical frames, marking colours, the light band and the
+distance histogram with its thresholds — so a user can see whether it learnt their track (docs/learning.md)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from fearguard.track.learn import Learnt
+from fearguard.track.profile import UNFAMILIAR_RATIO
+
+
+def draw_track(learnt: Learnt, path: str | Path) -> Path:
+    """Write the page; returns its path."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    p = learnt.profile
+    fig = plt.figure(figsize=(10, 7.5))
+    frames = learnt.typical_frames
+    for i, img in enumerate(frames[:6]):
+        ax = fig.add_subplot(3, 6, i + 1)
+        ax.imshow(cv2.cvtColor(img, cv2.COLOR_BGR2RGB))
+        ax.set_axis_off()
+    fig.text(0.5, 0.97, f"track profile: {p.frames_learnt} frames learnt from {p.source}", ha="center", fontsize=9, wrap=True)
+    ax = fig.add_subplot(3, 2, 3)
+    colours = p.marking_colours_bgr
+    if len(colours):
+        ax.imshow(np.clip(colours[None, :, ::-1] / 255.0, 0, 1), aspect="auto")
+        ax.set_xticks(range(len(colours)), [f"BGR {tuple(int(v) for v in c)}" for c in colours], fontsize=7)
+    else:
+        ax.text(0.5, 0.5, "no marking colour seen in most frames", ha="center", va="center", fontsize=8)
+        ax.set_xticks([])
+    ax.set_yticks([])
+    ax.set_title("high-contrast floor colours seen in most frames (markings)", fontsize=8)
+    ax = fig.add_subplot(3, 2, 4)
+    b = learnt.brightness[np.isfinite(learnt.brightness)]
+    ax.hist(b, bins=40, range=(0, 255), color="grey")
+    for v in p.brightness_band:
+        ax.axvline(v, color="crimson")
+    ax.set_title(f"brightness of the road region: learnt band {p.brightness_band[0]:.0f}–{p.brightness_band[1]:.0f}", fontsize=8)
+    ax.set_xlabel("grey level", fontsize=8)
+    ax = fig.add_subplot(3, 1, 3)
+    ref = p.reference_distance
+    c = p.calibration_distances
+    ax.hist(c / ref, bins=60, color="steelblue", range=(0, max(UNFAMILIAR_RATIO * 1.2, float(c.max() / ref))))
+    ax.axvline(1.0, color="orange", label="familiar up to here (reference percentile)")
+    ax.axvline((1.0 + UNFAMILIAR_RATIO) / 2.0, color="darkorange", ls="--", label="half-familiar (0.5)")
+    ax.axvline(UNFAMILIAR_RATIO, color="crimson", label="unfamiliar (0)")
+    ax.set_xlabel("distance to the learnt frames / reference distance (the recordings' own, more than 2 s apart)", fontsize=8)
+    ax.legend(fontsize=7)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
+    out = Path(path)
+    fig.savefig(out, dpi=80)
+    plt.close(fig)
+    return out

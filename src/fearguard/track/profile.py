@@ -1,0 +1,193 @@
+"""A track profile: what the car's own recordings look like, and how far a new frame is from them (docs/learning.md).
+
+``TrackProfile`` is a frozen value, saved as one ``.npz`` (format ``FORMAT``/``VERSION``, every array named and
+documented in docs/learning.md) and read back by ``load_track``, which checks every key and shape and names the one
+that is wrong (``FileError``: exit 2 on the command line).
+
+Familiarity of a frame (the sixth cue): its features (``features.py``), weighted so each block counts alike, projected
+on the learnt principal components plus the length of what the components do not explain; the mean distance to its
+``NEIGHBOURS`` nearest learnt frames is ``d``. The learning calibrated ``d`` on the recordings themselves: each
+calibration frame against the learnt frames more than ``CALIBRATION_GAP_S`` away in time (a frame's own neighbours in
+time would make everything look familiar). With ``d_ref`` the ``REFERENCE_PERCENTILE``-th percentile of those
+distances::
+
+    familiarity = clip((UNFAMILIAR_RATIO − d / d_ref) / (UNFAMILIAR_RATIO − 1), 0, 1)
+
+1 up to ``d_ref`` (as familiar as 95 % of the recordings), 0.5 half-way, 0 from ``UNFAMILIAR_RATIO · d_ref``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fearguard.errors import FileError
+from fearguard.track.features import BLOCK_SIZES, block_slices, frame_features
+
+FORMAT = "fearguard-track"
+VERSION = 1
+NEIGHBOURS = 3  # [frames] a new frame's distance is the mean to this many nearest learnt frames (one odd frame is no track)
+REFERENCE_PERCENTILE = 95.0  # [%] of the recordings' own distances: up to here a frame is fully familiar
+UNFAMILIAR_RATIO = 2.0  # [-] d / d_ref at which familiarity reaches 0 (unfamiliar)
+CALIBRATION_GAP_S = 2.0  # [s] a calibration frame is compared only with learnt frames further away in time than this
+BAND_PERCENTILES = (2.0, 98.0)  # [%] of the recordings' brightness: the learnt normal light
+FEATURE_COUNT = int(sum(BLOCK_SIZES))
+BAND_EDGE = 0.5  # [grey levels] the learnt band is kept this far from 0, 255 and itself when it is read
+
+
+@dataclass(frozen=True, eq=False)  # eq=False: holds arrays
+class TrackProfile:
+    """What was learnt from a car's recordings. Arrays are read-only."""
+
+    source: str  # what it was learnt from (paths), for the reasons and the picture
+    frames_learnt: int  # frames whose features were learnt
+    mean: np.ndarray  # (F,) feature mean of the learnt frames
+    weights: np.ndarray  # (F,) per-feature weight: each block (layout, colour, edges) counts alike
+    basis: np.ndarray  # (k, F) principal components of the weighted features (rows, orthonormal)
+    bank: np.ndarray  # (M, k + 1) learnt frames: projections and the unexplained length
+    calibration_distances: np.ndarray  # (C,) sorted: the recordings' own distances (see the module docstring)
+    brightness_band: tuple[float, float]  # [grey level 0..255] the learnt normal light (BAND_PERCENTILES of the cue)
+    lane_confidence_median: float  # [0..1] the camera's lane confidence on the recordings (NaN: not measured)
+    marking_colours_bgr: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) the track's markings, typical BGR
+
+    @property
+    def reference_distance(self) -> float:
+        """d_ref: the REFERENCE_PERCENTILE-th percentile of the recordings' own distances."""
+        return float(np.percentile(self.calibration_distances, REFERENCE_PERCENTILE))
+
+    def distance(self, features: np.ndarray) -> float:
+        """Mean distance of one feature vector to its NEIGHBOURS nearest learnt frames (NaN for non-finite features)."""
+        q = self.embed(features[None, :])[0]
+        if not np.all(np.isfinite(q)):
+            return math.nan
+        d2 = np.einsum("ij,ij->i", self.bank - q, self.bank - q)
+        k = min(NEIGHBOURS, d2.size)
+        return float(np.sqrt(np.partition(d2, k - 1)[:k]).mean())
+
+    def embed(self, features: np.ndarray) -> np.ndarray:
+        """(N, F) features → (N, k + 1): the projection on the components and the length they leave unexplained."""
+        z = (np.asarray(features, dtype=np.float64) - self.mean) * self.weights
+        p = z @ self.basis.T
+        rest = z - p @ self.basis
+        return np.hstack([p, np.sqrt(np.einsum("ij,ij->i", rest, rest))[:, None]])
+
+    def familiarity_of(self, distance: float) -> float:
+        """The cue for a distance (module docstring); NaN stays NaN (unknown = worst)."""
+        if not math.isfinite(distance):
+            return math.nan
+        ratio = distance / max(self.reference_distance, 1e-12)
+        return float(np.clip((UNFAMILIAR_RATIO - ratio) / (UNFAMILIAR_RATIO - 1.0), 0.0, 1.0))
+
+    def percentile_of(self, distance: float) -> float:
+        """[%] of the recordings' own distances below this one (100: beyond every learnt frame)."""
+        c = self.calibration_distances
+        return 100.0 * float(np.searchsorted(c, distance, side="right")) / max(c.size, 1)
+
+    def familiarity(self, frame: object) -> tuple[float, str]:
+        """The cue for one frame and the sentence behind it ('' when fully familiar); NaN when it is not a picture."""
+        f = frame_features(frame)
+        if f is None:
+            return math.nan, "track: no picture to compare with the learnt track: familiarity unknown (worst)"
+        d = self.distance(f)
+        fam = self.familiarity_of(d)
+        if not math.isfinite(fam):
+            return math.nan, "track: the picture's features are not finite: familiarity unknown (worst)"
+        if fam >= 1.0:
+            return fam, ""
+        where = ("beyond every learnt frame" if d > self.calibration_distances[-1]
+                 else f"at the {self.percentile_of(d):.1f}th percentile of the learnt frames")
+        return fam, (f"track: unlike the learnt track: distance {d / self.reference_distance:.2f}× the reference, "
+                     f"{where}: familiarity {fam:.2f}")
+
+    def brightness_as_learnt(self, brightness: float, normal_band: tuple[float, float]) -> float:
+        """The measured brightness read against the learnt light: the learnt band maps onto the rule file's normal band,
+        0 stays 0 and 255 stays 255, linear between (monotone: darker stays darker). A dim carpet arena is normal
+        for the car that learnt it; a blackout is still dark."""
+        if not math.isfinite(brightness):
+            return brightness
+        lo = min(max(self.brightness_band[0], BAND_EDGE), 255.0 - 2.0 * BAND_EDGE)  # a band touching 0 or 255, or a point:
+        hi = min(max(self.brightness_band[1], lo + BAND_EDGE), 255.0 - BAND_EDGE)  # widened so the map stays a function
+        n_lo, n_hi = normal_band
+        return float(np.interp(brightness, [0.0, lo, hi, 255.0], [0.0, n_lo, n_hi, 255.0]))
+
+
+def load_track(path: str | Path) -> TrackProfile:
+    """A profile written by ``fearguard learn``; a wrong file is a ``FileError`` naming the file and the key."""
+    p = Path(path)
+    try:
+        with np.load(p, allow_pickle=False) as z:
+            data = {k: z[k] for k in z.files}
+    except FileNotFoundError:
+        raise FileError(str(p), "file", "no such file (write one with `fearguard learn RECORDING --out track.npz`)") from None
+    except (OSError, ValueError, EOFError) as exc:
+        raise FileError(str(p), "file", f"not a track profile (.npz written by `fearguard learn`): {exc}") from None
+    return profile_from_arrays(data, str(p))
+
+
+def profile_from_arrays(data: dict[str, np.ndarray], where: str) -> TrackProfile:
+    """Check every key of a saved profile and build it."""
+
+    def need(key: str, ndim: int, cols: int | None = None) -> np.ndarray:
+        if key not in data:
+            raise FileError(where, key, "missing: not a complete track profile (relearn with `fearguard learn`)")
+        a = data[key]
+        if a.dtype.kind not in "fiu" or a.ndim != ndim or (cols is not None and a.shape[-1] != cols):
+            raise FileError(where, key, f"expected a {ndim}-d array of numbers{f' with {cols} columns' if cols else ''}, "
+                                        f"got {a.dtype} {a.shape}")
+        a = a.astype(np.float64)
+        if not np.all(np.isfinite(a)):
+            raise FileError(where, key, "has values that are not finite numbers")
+        a.setflags(write=False)
+        return a
+
+    fmt = str(data["format"]) if "format" in data else ""
+    if fmt != FORMAT:
+        raise FileError(where, "format", f"expected {FORMAT!r}, got {fmt!r}: not a fearguard track profile")
+    version = need("version", 0)
+    if int(version) != VERSION:
+        raise FileError(where, "version", f"version {int(version)} is not {VERSION}: relearn with this fearguard")
+    mean, weights = need("mean", 1, FEATURE_COUNT), need("weights", 1, FEATURE_COUNT)
+    basis = need("basis", 2, FEATURE_COUNT)
+    bank = need("bank", 2, basis.shape[0] + 1)
+    calib = need("calibration_distances", 1)
+    band = need("brightness_band", 1, 2)
+    if bank.shape[0] < 1 or calib.size < 1:
+        raise FileError(where, "bank", "no learnt frames")
+    if not 0.0 <= band[0] <= band[1] <= 255.0:
+        raise FileError(where, "brightness_band", f"expected 0 ≤ low ≤ high ≤ 255, got {band.tolist()}")
+    lane = data.get("lane_confidence_median", np.array(math.nan))
+    colours = need("marking_colours_bgr", 2, 3) if "marking_colours_bgr" in data else np.zeros((0, 3))
+    return TrackProfile(
+        source=str(data.get("source", "")), frames_learnt=int(need("frames_learnt", 0)), mean=mean, weights=weights,
+        basis=basis, bank=bank, calibration_distances=np.sort(calib), brightness_band=(float(band[0]), float(band[1])),
+        lane_confidence_median=float(lane) if np.ndim(lane) == 0 else math.nan, marking_colours_bgr=colours,
+    )
+
+
+def save_track(profile: TrackProfile, path: str | Path) -> Path:
+    """Write the profile as one .npz (docs/learning.md lists the keys)."""
+    p = Path(path)
+    p.parent.mkdir(parents=True, exist_ok=True)
+    with p.open("wb") as fh:
+        np.savez_compressed(
+            fh, format=np.array(FORMAT), version=np.array(VERSION), source=np.array(profile.source),
+            frames_learnt=np.array(profile.frames_learnt), mean=profile.mean, weights=profile.weights, basis=profile.basis,
+            bank=profile.bank, calibration_distances=profile.calibration_distances,
+            brightness_band=np.array(profile.brightness_band), lane_confidence_median=np.array(profile.lane_confidence_median),
+            marking_colours_bgr=profile.marking_colours_bgr,
+        )
+    return p
+
+
+def block_weights(features: np.ndarray) -> np.ndarray:
+    """Per-feature weights so that each block's total spread over the learnt frames is 1 (a block with 192 pixels
+    must not drown one with 6 colour statistics)."""
+    w = np.ones(features.shape[1])
+    centred = features - features.mean(axis=0)
+    for s in block_slices():
+        spread = math.sqrt(float((centred[:, s] ** 2).sum(axis=1).mean()))
+        w[s] = 1.0 / max(spread, 1e-3)
+    return w

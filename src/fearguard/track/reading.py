@@ -1,0 +1,45 @@
+"""One frame's cues read against a track profile: familiarity, and the light and the lane as this track has them.
+
+Pure: the profile, the frame and the camera's own measurements in, the cues and the sentences behind them out.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from fearguard.track.profile import TrackProfile
+
+LANE_SEEN = 0.5  # [0..1] median lane confidence on the recordings from which the camera's lane model sees this track
+
+
+@dataclass(frozen=True)
+class AsLearnt:
+    """The cues a track changes, and why."""
+
+    familiarity: float
+    brightness: float
+    lane_confidence: float
+    facts: tuple[str, ...]
+
+
+def read_as_learnt(profile: TrackProfile, frame: object, lane_confidence: float, brightness: float,
+                   normal_band: tuple[float, float]) -> AsLearnt:
+    """Familiarity of the frame; brightness with the learnt light band mapped onto the rule file's normal band; the lane
+    confidence relative to what the camera's lane model reads on this track — or, where it never saw this track's
+    guidance on the recordings, how like the learnt track the picture is (the only guidance measure that track has)."""
+    fam, why = profile.familiarity(frame)
+    facts = [why] if why else []
+    lo, hi = profile.brightness_band
+    b = profile.brightness_as_learnt(brightness, normal_band)
+    if math.isfinite(brightness) and not lo <= brightness <= hi:
+        side = "below" if brightness < lo else "above"
+        facts.append(f"track: brightness {brightness:.0f} {side} the learnt band {lo:.0f}–{hi:.0f}: read as {b:.0f}")
+    seen = profile.lane_confidence_median
+    if math.isfinite(seen) and seen >= LANE_SEEN:
+        lane = min(1.0, lane_confidence / seen) if math.isfinite(lane_confidence) else lane_confidence
+    else:
+        lane = fam
+        facts.append(f"track: the camera's lane model did not see this track's guidance on the recordings (median confidence "
+                     f"{seen:.2f}): the lane cue reads how like the learnt track the picture is ({fam:.2f})")
+    return AsLearnt(fam, b, lane, tuple(facts))

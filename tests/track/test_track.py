@@ -1,0 +1,201 @@
+"""Track profiles (issue 34): learnt from real recordings, read back exactly, a calibrated familiarity that falls for
+what is unlike the recordings, the light read against the learnt band — and every wrong file a FileError naming its key."""
+
+from __future__ import annotations
+
+import io
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import fearguard as fg
+from fearguard.cli import main
+from fearguard.errors import FileError
+from fearguard.track.features import frame_features
+from fearguard.track.learn import LearnOptions, learn_track
+from fearguard.track.profile import UNFAMILIAR_RATIO, load_track, profile_from_arrays, save_track
+
+ROBOCAR = "modelcar/robocar-ucsd-window/images"  # glass walls, a bright window: 160×120 images, 20 fps
+DEEPPICAR = "modelcar/deeppicar-tape/video01.avi"  # a PiCar on tape, 320×240 video
+TUB = "modelcar/donkey-carpet-dark"  # a Donkey tub on dark carpet
+
+
+@pytest.fixture(scope="module")
+def robocar_track(shared_data: Path) -> fg.TrackProfile:
+    return learn_track([shared_data / ROBOCAR], LearnOptions(stop="1300f", every=2)).profile
+
+
+def _frames(path: Path, start: int, stop: int, every: int) -> list[np.ndarray]:
+    from fearguard.replay.recordings import open_recording
+
+    return [f.image_bgr for f in open_recording(path).iter_frames(start, stop, every)]
+
+
+def test_a_profile_survives_its_file(robocar_track, tmp_path):
+    back = load_track(save_track(robocar_track, tmp_path / "t.npz"))
+    for key in ("mean", "weights", "basis", "bank", "calibration_distances"):
+        assert np.array_equal(getattr(back, key), getattr(robocar_track, key)), key
+    assert back.brightness_band == robocar_track.brightness_band and back.frames_learnt == robocar_track.frames_learnt
+    frame = _frames(Path(robocar_track.source), 1400, 1401, 1)[0]
+    assert back.familiarity(frame) == robocar_track.familiarity(frame)
+
+
+def test_later_frames_of_the_same_track_are_familiar_other_tracks_and_changes_are_not(robocar_track, shared_data):
+    later = [robocar_track.familiarity(f)[0] for f in _frames(shared_data / ROBOCAR, 1350, 2550, 40)]
+    assert np.median(later) >= 0.8  # the same room, a few laps on
+    for other in (TUB, DEEPPICAR):  # another room, another camera
+        there = [robocar_track.familiarity(f)[0] for f in _frames(shared_data / other, 0, 200, 20)]
+        assert np.mean(np.array(there) < 0.5) >= 0.8, (other, there)
+    boxed = []
+    for i, f in enumerate(_frames(shared_data / ROBOCAR, 1350, 2550, 80)):  # a box over half the lane, colours vary
+        f = f.copy()
+        h, w = f.shape[:2]
+        f[h // 2:, w // 4: 3 * w // 4] = ((i * 67) % 256, (i * 131) % 256, (i * 29) % 256)
+        boxed.append(robocar_track.familiarity(f)[0])
+    assert np.mean(np.array(boxed) < 0.5) >= 0.8, boxed
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(0.0, 1e6), st.floats(0.0, 1e6))
+def test_familiarity_never_rises_with_distance_and_stays_in_0_1(robocar_track, a, b):
+    fa, fb = robocar_track.familiarity_of(min(a, b)), robocar_track.familiarity_of(max(a, b))
+    assert 0.0 <= fb <= fa <= 1.0
+
+
+def test_familiarity_is_1_within_the_reference_and_0_from_the_unfamiliar_ratio(robocar_track):
+    ref = robocar_track.reference_distance
+    assert robocar_track.familiarity_of(ref) == 1.0 and robocar_track.familiarity_of(UNFAMILIAR_RATIO * ref) == 0.0
+    assert math.isnan(robocar_track.familiarity_of(math.nan))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(0.0, 255.0), st.floats(0.0, 255.0), st.floats(0.0, 255.0), st.floats(0.0, 255.0))
+def test_light_read_against_the_learnt_band_keeps_darker_darker_and_the_ends_fixed(robocar_track, a, b, lo, hi):
+    from dataclasses import replace
+
+    lo, hi = sorted((lo, hi))
+    track = replace(robocar_track, brightness_band=(lo, hi))
+    band = (80.0, 180.0)
+    ra, rb = track.brightness_as_learnt(min(a, b), band), track.brightness_as_learnt(max(a, b), band)
+    assert 0.0 <= ra <= rb <= 255.0
+    assert track.brightness_as_learnt(0.0, band) == 0.0 and track.brightness_as_learnt(255.0, band) == 255.0
+    if 1.0 <= lo and lo + 1.0 <= hi <= 254.0:
+        assert track.brightness_as_learnt(lo, band) == pytest.approx(80.0)
+        assert track.brightness_as_learnt(hi, band) == pytest.approx(180.0)
+
+
+def test_a_dim_room_is_normal_for_the_car_that_learnt_it_and_a_blackout_is_not(robocar_track):
+    from dataclasses import replace
+
+    dim = replace(robocar_track, brightness_band=(30.0, 60.0))
+    assert 80.0 <= dim.brightness_as_learnt(45.0, (80.0, 180.0)) <= 180.0
+    assert dim.brightness_as_learnt(4.0, (80.0, 180.0)) < 20.0  # the rule file's dark
+
+
+def test_the_tub_s_standing_frames_are_not_learnt(shared_data):
+    learnt = learn_track([shared_data / TUB], LearnOptions(stop="400f"))
+    assert learnt.frames_standing > 0 and learnt.profile.frames_learnt == learnt.frames_read - learnt.frames_standing
+
+
+def test_the_supervisor_reads_the_track_and_without_one_the_cue_does_not_apply(robocar_track, shared_data):
+    frame = _frames(shared_data / TUB, 300, 301, 1)[0]
+    with_track = fg.FearGuard(lambda f: 0.0, track=robocar_track)
+    cmd = with_track.step(fg.Observation(t_s=0.0, speed_mps=0.5, frame=frame))
+    assert cmd.cues.familiarity < 0.5 and any("unlike the learnt track" in r for r in cmd.reasons)
+    missing = with_track.step(fg.Observation(t_s=0.05, speed_mps=0.5, frame=None))
+    assert math.isnan(missing.cues.familiarity)
+    plain = fg.FearGuard(lambda f: 0.0).step(fg.Observation(t_s=0.0, speed_mps=0.5, frame=frame))
+    assert plain.cues.familiarity == 1.0
+
+
+def test_a_given_familiarity_counts_and_unknown_is_worst():
+    rules = fg.load_rules()
+    calm = dict(lane_confidence=1.0, brightness=120.0, occlusion=0.0, obstacle_range_m=math.inf, qr_staleness_s=0.0)
+    assert rules.evaluate(fg.Cues(**calm)).fear == rules.evaluate(fg.Cues(**calm, familiarity=1.0)).fear
+    low = rules.evaluate(fg.Cues(**calm, familiarity=0.0)).fear
+    assert low >= rules.policy.caution_fear and rules.evaluate(fg.Cues(**calm, familiarity=math.nan)).fear == low
+    five = np.array([[1.0, 120.0, 0.0, math.inf, 0.0]])
+    assert rules.evaluate_batch(five)[0] == rules.evaluate_batch(np.hstack([five, [[1.0]]]))[0]
+    assert rules.evaluate_batch(np.hstack([five, [[0.0]]]))[0] == pytest.approx(low)
+    with pytest.raises(ValueError, match=r"\(N, 5\) or \(N, 6\)"):
+        rules.evaluate_batch(np.zeros((2, 4)))
+
+
+def _arrays(track: fg.TrackProfile, tmp_path: Path) -> dict[str, np.ndarray]:
+    with np.load(save_track(track, tmp_path / "ok.npz")) as z:
+        return {k: z[k] for k in z.files}
+
+
+@pytest.mark.parametrize(("key", "value", "says"), [
+    ("format", np.array("something-else"), "format"), ("version", np.array(99), "version"), ("bank", None, "bank"),
+    ("mean", np.zeros(3), "mean"), ("calibration_distances", np.array([np.nan]), "calibration_distances"),
+    ("brightness_band", np.array([200.0, 100.0]), "brightness_band"), ("basis", np.array(["a", "b"]), "basis"),
+])
+def test_a_wrong_profile_names_its_key(robocar_track, tmp_path, key, value, says):
+    data = _arrays(robocar_track, tmp_path)
+    if value is None:
+        del data[key]
+    else:
+        data[key] = value
+    path = tmp_path / "bad.npz"
+    np.savez(path, **data)
+    with pytest.raises(FileError, match=says) as err:
+        load_track(path)
+    assert str(path) in str(err.value)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.binary(max_size=400))
+def test_any_bytes_are_a_profile_or_a_file_error(tmp_path_factory, blob):
+    path = tmp_path_factory.mktemp("fuzz") / "t.npz"
+    path.write_bytes(blob)
+    with pytest.raises(FileError):
+        load_track(path)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.dictionaries(st.sampled_from(["format", "version", "mean", "weights", "basis", "bank", "calibration_distances",
+                                        "brightness_band", "frames_learnt", "source"]),
+                       st.one_of(st.integers(-3, 300).map(np.array), st.text(max_size=5).map(np.array),
+                                 st.lists(st.floats(allow_nan=True), max_size=4).map(np.array)), max_size=10))
+def test_hostile_arrays_are_a_file_error_never_a_crash(data):
+    with pytest.raises(FileError):
+        profile_from_arrays(data, "hostile.npz")
+
+
+def test_frame_features_refuse_what_is_not_a_picture_and_take_any_picture():
+    assert frame_features(None) is None and frame_features(np.zeros((0, 5, 3), np.uint8)) is None
+    assert frame_features(np.array([["a"]], dtype=object)) is None and frame_features(np.zeros((4, 4, 7))) is None
+    for img in (np.zeros((120, 160), np.uint8), np.full((480, 640, 4), 200, np.uint8), np.random.default_rng(3).random((9, 13, 3))):
+        f = frame_features(img)
+        assert f is not None and np.all(np.isfinite(f))
+
+
+def test_learn_and_replay_from_the_command_line(shared_data, tmp_path, capsys):
+    out = tmp_path / "track.npz"
+    assert main(["learn", str(shared_data / DEEPPICAR), "--to", "100f", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "learnt 100 frames" in printed and "brightness band" in printed
+    assert out.is_file() and out.with_suffix(".png").is_file()
+    assert cv2.imread(str(out.with_suffix(".png"))) is not None
+    rp = tmp_path / "rp"
+    assert main(["replay", str(shared_data / DEEPPICAR), "--from", "100f", "--to", "130f", "--track", str(out), "--out", str(rp),
+                 "--no-plots"]) == 0
+    import json
+
+    rows = [json.loads(line) for line in (rp / "log.jsonl").read_text().splitlines()]
+    assert len(rows) == 30 and all(0.0 <= r["familiarity"] <= 1.0 for r in rows)
+
+
+def test_learn_says_what_is_wrong_with_exit_2(shared_data, tmp_path, capsys):
+    assert main(["learn", str(shared_data / DEEPPICAR), "--to", "5f", "--out", str(tmp_path / "t.npz")]) == 2
+    assert "at least 20" in capsys.readouterr().err
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(io.BytesIO(b"not a profile").getvalue())
+    assert main(["replay", str(shared_data / DEEPPICAR), "--to", "3f", "--track", str(bad), "--out", str(tmp_path / "o")]) == 2
+    assert "bad.npz" in capsys.readouterr().err
