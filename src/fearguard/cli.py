@@ -451,7 +451,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     controller = "unguarded" if args.unguarded else (args.baseline or "guarded")
     out = Path(args.out) if args.out else _new_out("run", f"{scenario.name}-{controller}")
     with _Progress(scenario.name) as progress:
-        result = run_to_folder(scenario, out, args.seed, controller, args.video, progress.update, stop=args.stop, mcap=args.mcap)
+        result = run_to_folder(scenario, out, args.seed, controller, args.video, progress.update, stop=args.stop, mcap=args.mcap,
+                               track=args.track)
     m = result.metrics
     print(f"{scenario.name} ({controller}, seed {result.seed}): {result.frames} frames, {m.distance_m:.1f} m, "
           f"mean speed {m.mean_speed_mps or 0.0:.2f} m/s, collisions {m.collisions}, lane departures {m.lane_departures}, "
@@ -604,7 +605,8 @@ def cmd_verify(args: argparse.Namespace) -> int:
     except ImportError as exc:  # hypothesis is an optional extra
         raise FearguardError(f"fearguard verify needs hypothesis ({exc}): pip install 'fearguard[testing]'") from None
     only = tuple(filter(None, (args.only or "").split(",")))
-    return verify_command(args.rules, args.vehicle, args.steer, args.examples, args.seed, args.out, only, args.replay)
+    return verify_command(args.rules, args.vehicle, args.steer, args.examples, args.seed, args.out, only, args.replay,
+                          track=args.track)
 
 
 def cmd_duckietown(args: argparse.Namespace) -> int:
@@ -937,6 +939,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", type=_out_folder, default=None, help="output folder " + OUT_HELP % "run")
     run.add_argument("--video", action="store_true", help=VIDEO_HELP)
     run.add_argument("--mcap", action="store_true", help=MCAP_HELP)
+    run.add_argument("--track", default=None, help="track profile from `fearguard learn` for the guarded supervisor")
     run.set_defaults(func=cmd_run)
     suite = sub.add_parser("suite", help="every scenario guarded and with the baselines: a comparison table")
     suite.add_argument("folder", nargs="?", type=_folder, default=None, help="folder of scenario files (default: the bundled library)")
@@ -972,6 +975,7 @@ def build_parser() -> argparse.ArgumentParser:
     verify.add_argument("--only", default=None, help="comma-separated invariant keys or numbers, e.g. 2,monotone")
     verify.add_argument("--out", default="fearguard-counterexamples", help="folder for counterexample files")
     verify.add_argument("--replay", default=None, help="re-run a counterexample file instead: exit 1 if it still fails")
+    verify.add_argument("--track", default=None, help="track profile from `fearguard learn`: verify the supervisor that reads it")
     verify.set_defaults(func=cmd_verify)
     dt = sub.add_parser("duckietown", help="drive a Duckiebot in gym-duckietown (needs `bash .ci/duckietown.sh`)")
     dt.add_argument("map", nargs="?", default=None, help="map name, e.g. loop_empty, small_loop, zigzag_dists, straight_road")

@@ -199,3 +199,32 @@ def test_learn_says_what_is_wrong_with_exit_2(shared_data, tmp_path, capsys):
     bad.write_bytes(io.BytesIO(b"not a profile").getvalue())
     assert main(["replay", str(shared_data / DEEPPICAR), "--to", "3f", "--track", str(bad), "--out", str(tmp_path / "o")]) == 2
     assert "bad.npz" in capsys.readouterr().err
+
+
+def test_a_scenario_run_with_another_track_s_profile_slows_and_says_why(shared_data, tmp_path, capsys):
+    """The simulator's taped track is nothing like a PiCar's room: with that room's profile the guarded car is slower."""
+    track = tmp_path / "room.npz"
+    assert main(["learn", str(shared_data / DEEPPICAR), "--out", str(track)]) == 0
+    runs = {}
+    for name, extra in (("plain", []), ("room", ["--track", str(track)])):
+        out = tmp_path / name
+        main(["run", "clear_straight", "--out", str(out), *extra])
+        import json
+
+        rows = [json.loads(line) for line in (out / "log.jsonl").read_text().splitlines()]
+        runs[name] = rows
+    capsys.readouterr()
+    fam = [r["familiarity"] for r in runs["room"] if r.get("familiarity") is not None]
+    assert np.median(fam) < 0.5 and all(r.get("familiarity") in (1.0, None) for r in runs["plain"])
+    speed = {k: np.mean([r["speed_limit_mps"] for r in v if r.get("speed_limit_mps") is not None]) for k, v in runs.items()}
+    assert speed["room"] < speed["plain"]
+    assert any("unlike the learnt track" in reason for r in runs["room"] for reason in r.get("reasons", []))
+
+
+def test_verify_holds_for_a_supervisor_that_reads_a_track(robocar_track, tmp_path, capsys):
+    path = save_track(robocar_track, tmp_path / "t.npz")
+    code = main(["verify", "--track", str(path), "--examples", "5", "--only", "unknown_is_worst,monotone,reachable,repeated_frames",
+                 "--out", str(tmp_path / "cx")])
+    printed = capsys.readouterr().out
+    assert code == 0, printed
+    assert f"track {path}" in printed and "4 held, 0 failed" in printed

@@ -152,6 +152,7 @@ def run_scenario(
     scenario: Scenario, seed: int | None = None, controller: str = "guarded", out_dir: Path | None = None, *, video: bool = False,
     on_frame: Callable[[int, int], None] | None = None, stop: StopSignal | None = None, video_kind: str | None = None,
     mcap: bool = False, policy: Mapping[str, Any] | None = None, vehicle: Mapping[str, Any] | None = None,
+    track: str | None = None,
 ) -> RunResult:
     """Run one scenario closed loop; with ``out_dir``, record log.jsonl (flushed per frame) and, if asked, the video.
 
@@ -160,6 +161,8 @@ def run_scenario(
 
     ``stop`` (from ``interrupt.stop_on_signals``) ends the run after the current frame; so does a
     KeyboardInterrupt. Either way the result says ``interrupted`` and keeps every frame recorded.
+
+    ``track``: a track profile (``fearguard learn``, e.g. on an earlier run's video) the guarded supervisor reads with.
     """
     if controller not in CONTROLLERS:
         raise ValueError(f"unknown controller {controller!r}; choose one of {', '.join(CONTROLLERS)}")
@@ -174,7 +177,7 @@ def run_scenario(
     rules = load_rules(scenario.rules_path)
     if policy:
         rules = replace(rules, policy=policy_with(rules.policy, policy, f"{scenario.path}: the changed [policy] of {rules.path}"))
-    guard = FearGuard(estimator, rules=rules, vehicle=limits, camera=camera)
+    guard = FearGuard(estimator, rules=rules, vehicle=limits, camera=camera, track=track)
     total = math.ceil(scenario.duration_s / world.world.dt_s)
     recorder = Recorder(out_dir, fps=scenario.camera.fps, video=video, video_kind=video_kind, mcap=mcap)
     ran = run(world, scenario_controller(controller, scenario, guard, estimator, limits), recorder, stop=stop, on_frame=on_frame,

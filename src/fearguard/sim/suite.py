@@ -50,13 +50,15 @@ def scenario_files(folder: str | Path | None = None) -> list[Path]:
 def run_to_folder(
     scenario: Scenario, out: Path, seed: int | None = None, controller: str = "guarded", video: bool = False,
     on_frame: Callable[[int, int], None] | None = None, stop: StopSignal | None = None, mcap: bool = False,
+    track: str | None = None,
 ) -> RunResult:
-    """One run with every file a person looks at (``mcap``: run.mcap too); the summary is on disk before the plots are drawn.
+    """One run with every file a person looks at (``mcap``: run.mcap too; ``track``: a track profile for the supervisor);
+    the summary is on disk before the plots are drawn.
 
     A stop signal during the plots skips the plots not yet drawn and marks the summary interrupted.
     """
     out.mkdir(parents=True, exist_ok=True)
-    result = run_scenario(scenario, seed, controller, out, video=video, on_frame=on_frame, stop=stop, mcap=mcap)
+    result = run_scenario(scenario, seed, controller, out, video=video, on_frame=on_frame, stop=stop, mcap=mcap, track=track)
     write_json(out / SUMMARY_NAME, result.to_json())
     if result.rows:
         title = f"{scenario.name} ({controller}, seed {result.seed})"

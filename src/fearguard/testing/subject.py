@@ -33,22 +33,25 @@ class Subject:
     steer: Callable[[Any], Any] | None = None
     vehicle_name: str = "default"
     steer_name: str = "scripted"
+    track: fg.TrackProfile | None = None  # a learnt track profile the supervisor reads frames with (None: none)
+    track_path: str | None = None
 
     @classmethod
     def of(cls, rules: fg.RuleBase | str | Path | None = None, vehicle: fg.VehicleLimits | str | Path | None = None,
-           steer: Callable[[Any], Any] | str | None = None) -> Subject:
+           steer: Callable[[Any], Any] | str | None = None, track: fg.TrackProfile | str | Path | None = None) -> Subject:
         rb = rules if isinstance(rules, fg.RuleBase) else fg.load_rules(rules)
         car, car_name = resolve_vehicle(vehicle)
         check_honourable(car, car_name)
         fn, fn_name = resolve_steer(steer)
-        return cls(rb, car, fn, car_name, fn_name)
+        profile = fg.load_track(track) if isinstance(track, str | Path) else track
+        return cls(rb, car, fn, car_name, fn_name, profile, str(track) if isinstance(track, str | Path) else None)
 
     def header(self) -> dict[str, Any]:
         """What a counterexample file records about the subject, to replay it."""
         return {
             "rules": self.rules.path, "rules_name": self.rules.name, "vehicle_name": self.vehicle_name,
             "vehicle": {f.name: _json_number(getattr(self.vehicle, f.name)) for f in fields(self.vehicle)},
-            "steer": self.steer_name,
+            "steer": self.steer_name, **({"track": self.track_path} if self.track_path else {}),
         }
 
 
@@ -146,7 +149,8 @@ class Driver:
     def __init__(self, subject: Subject) -> None:
         self.subject = subject
         self._answers: list[Any] = []
-        self.guard = fg.FearGuard(self._steer if subject.steer is not None else None, rules=subject.rules, vehicle=subject.vehicle)
+        self.guard = fg.FearGuard(self._steer if subject.steer is not None else None, rules=subject.rules, vehicle=subject.vehicle,
+                                  track=subject.track)
         self._reset_steer()
 
     def _reset_steer(self) -> None:

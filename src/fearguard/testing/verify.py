@@ -199,7 +199,7 @@ def table(outcomes: Sequence[Outcome]) -> str:
 
 
 def replay_counterexample(path: str | Path, rules: fg.RuleBase | str | None = None, vehicle: Any = None,
-                          steer: Any = None) -> tuple[Invariant, str | None]:
+                          steer: Any = None, track: str | None = None) -> tuple[Invariant, str | None]:
     """Re-run a saved counterexample with the subject in its header (or the ones given): the checker's verdict."""
     header, case = load_case(path)
     inv = invariant(str(header.get("invariant", "limits_in_range")))
@@ -210,7 +210,8 @@ def replay_counterexample(path: str | Path, rules: fg.RuleBase | str | None = No
     steer_name = header.get("steer")
     if steer is None and isinstance(steer_name, str) and ":" in steer_name:
         steer = steer_name
-    subject = Subject.of(rules if rules is not None else header.get("rules"), vehicle, steer)
+    track = track if track is not None else header.get("track")
+    subject = Subject.of(rules if rules is not None else header.get("rules"), vehicle, steer, track if isinstance(track, str) else None)
     return inv, inv.check(subject, case)
 
 
@@ -246,20 +247,22 @@ def supervisor_invariants(rules: fg.RuleBase | str | Path | None = None, vehicle
 
 def verify_command(rules: str | None, vehicle: str | None, steer: str | None, examples: int, seed: int, out: str | Path,
                    only: Sequence[str] = (), replay: str | None = None, echo: Callable[[str], None] = _echo,
-                   progress: Callable[[str], None] = lambda line: print(line, file=sys.stderr, flush=True)) -> int:
+                   progress: Callable[[str], None] = lambda line: print(line, file=sys.stderr, flush=True),
+                   track: str | None = None) -> int:
     """``fearguard verify``: the table, a shrunk counterexample file per failure; 0 all hold, 1 one fails.
 
     With ``replay``: re-run a saved counterexample; 1 if it still breaks its invariant, 0 if not.
     Bad files raise FearguardError (the CLI's exit 2).
     """
     if replay is not None:
-        inv, message = replay_counterexample(replay, rules, vehicle, steer)
+        inv, message = replay_counterexample(replay, rules, vehicle, steer, track)
         verdict = f"still fails: {message}" if message else "holds now (the counterexample no longer breaks it)"
         echo(f"{replay}: invariant {inv.number} ({inv.title}) {verdict}")
         return 1 if message else 0
-    subject = Subject.of(rules, vehicle, steer)
+    subject = Subject.of(rules, vehicle, steer, track)
+    with_track = f", track {track}" if track else ""
     echo(f"fearguard verify: rules {subject.rules.path} ({subject.rules.name!r}), vehicle {subject.vehicle_name}, "
-         f"steer {subject.steer_name}, up to {examples} examples per invariant, seed {seed}")
+         f"steer {subject.steer_name}{with_track}, up to {examples} examples per invariant, seed {seed}")
     echo(table_header())
     quarter = max(1, examples // 4)
 
