@@ -286,3 +286,18 @@ def test_the_shared_tub_as_ros1_and_ros2_mcap_bags_replays_like_the_tub_first_40
 @pytest.mark.slow
 def test_the_whole_shared_tub_as_ros1_and_ros2_mcap_bags_replays_like_the_tub(shared_data: Path, tmp_path: Path) -> None:
     _tub_and_bags_replay_alike(shared_data, tmp_path, None)
+
+
+def test_a_track_is_learnt_from_bags_as_from_the_tub(shared_data: Path, tmp_path: Path) -> None:
+    """`fearguard learn` reads bags as replay does: the tub's pictures as an MCAP bag teach what the tub teaches."""
+    from fearguard.track.learn import LearnOptions, learn_track
+
+    tub = shared_data / TUB
+    bags, stamps = _tub_as_bags(tub, tmp_path, 300)
+    from_bag = learn_track([bags["ros2-mcap"]]).profile
+    from_tub = learn_track([tub], LearnOptions(stop="300f")).profile
+    assert from_bag.frames_learnt == len(stamps)  # a bag has no throttle: no frame is known to be standing
+    assert from_tub.frames_learnt < len(stamps)  # the tub says when the car stood
+    later = [f.image_bgr for f in TubSource(tub, None).iter_frames(300, 500, 10)]
+    fam = [from_bag.familiarity(f)[0] for f in later]
+    assert np.median(fam) >= 0.5 and abs(np.median(fam) - np.median([from_tub.familiarity(f)[0] for f in later])) <= 0.3
