@@ -27,11 +27,12 @@ test -x "$VENV/bin/python" || python3 -m venv "$VENV"
 pip_install() { "$VENV/bin/python" -m pip install -q --disable-pip-version-check "$@"; }
 pip_install -c .ci/metadrive-constraints.txt --upgrade pip
 pip_install -c .ci/metadrive-constraints.txt metadrive-simulator==0.4.3 "numpy<2" opencv-python \
-  scipy "scikit-fuzzy==0.5.0" networkx packaging filterpy matplotlib rich av pytest hypothesis
+  scipy "scikit-fuzzy==0.5.0" networkx packaging filterpy matplotlib rich av pytest hypothesis \
+  mcap "dask[distributed]>=2026.8.0,<2027"  # mcap: run.mcap (--mcap); dask: metadrive-suite --jobs / --scheduler
 pip_install --no-deps -e .
 SITE="$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')"
 if [ "$(readlink "$SITE/metadrive/assets" 2>/dev/null)" != "$ASSETS" ]; then
   rm -rf "$SITE/metadrive/assets"
   ln -s "$ASSETS" "$SITE/metadrive/assets"
 fi
-"$VENV/bin/python" -c "from fearguard.worlds.metadrive.world import simulator; simulator(); print('metadrive simulator ready')"
+"$VENV/bin/python" -c "import dask.distributed, mcap; from fearguard.worlds.metadrive.world import simulator; simulator(); print('metadrive simulator ready (with Dask and mcap)')"
