@@ -228,3 +228,20 @@ def test_verify_holds_for_a_supervisor_that_reads_a_track(robocar_track, tmp_pat
     printed = capsys.readouterr().out
     assert code == 0, printed
     assert f"track {path}" in printed and "4 held, 0 failed" in printed
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.tuples(st.integers(0, 40), st.integers(0, 40), st.sampled_from([None, 1, 2, 3, 4, 5])),
+       st.sampled_from([np.uint8, np.uint16, np.float32, np.float64, np.int64, np.bool_]),
+       st.sampled_from([0.0, 1.0, 255.0, 1e300, -5.0, math.nan, math.inf]))
+def test_any_frame_with_a_track_is_an_answer_never_an_internal_error(robocar_track, shape, dtype, fill):
+    h, w, c = shape
+    dims = (h, w) if c is None else (h, w, c)
+    with np.errstate(all="ignore"):
+        frame = np.full(dims, fill).astype(dtype)
+    guard = fg.FearGuard(lambda f: 0.0, track=robocar_track)
+    for k in range(3):
+        cmd = guard.step(fg.Observation(t_s=0.05 * k, speed_mps=0.5, frame=frame))
+        assert not any("internal error" in r for r in cmd.reasons), cmd.reasons
+        fam = cmd.cues.familiarity
+        assert math.isnan(fam) or 0.0 <= fam <= 1.0
