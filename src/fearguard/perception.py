@@ -83,14 +83,17 @@ class Perception:
     def __init__(
         self, vehicle: VehicleLimits | None = None, camera: CameraModel | None = None, pipeline: FramePipeline | None = None,
         marker_spacing_m: float = 5.0, track: TrackProfile | None = None, normal_band: tuple[float, float] = (80.0, 180.0),
+        occlusion_calm: float = 0.1,
     ) -> None:
         """``pipeline``: analyse frames with this one (a FrameSteering's); its camera must be ``camera`` if both are given.
         ``track``: read each picture against this profile; ``normal_band``: the rule file's normal light, onto which the
-        learnt light band maps."""
+        learnt light band maps; ``occlusion_calm``: the top of the rule file's calm occlusion, onto which normal driving's
+        occlusion maps."""
         if track is not None and not isinstance(track, TrackProfile):
             raise TypeError(f"track must be a TrackProfile (fearguard.load_track), got {type(track).__name__}")
         self.track = track
         self.normal_band = normal_band
+        self.occlusion_calm = occlusion_calm
         self.vehicle = vehicle if vehicle is not None else VehicleLimits()
         if pipeline is not None and not isinstance(pipeline, FramePipeline):
             raise TypeError(f"pipeline must be a FramePipeline, got {type(pipeline).__name__}")
@@ -145,8 +148,8 @@ class Perception:
         lead = self._fuse_lead_range(lead, range_m)
         timings = {f"vision.{k}": v for k, v in seen.timings_ms.items()}
         timings.update(vision=(t1 - t0) * 1e3, ultrasonic=(t2 - t1) * 1e3, localisation=(t3 - t2) * 1e3)
-        lane_conf, brightness, familiarity = self._as_learnt(obs.frame, analysis, seen, facts)
-        cues = Cues(lane_confidence=lane_conf, brightness=brightness, occlusion=seen.occlusion,
+        lane_conf, brightness, occlusion, familiarity = self._as_learnt(obs.frame, analysis, seen, facts)
+        cues = Cues(lane_confidence=lane_conf, brightness=brightness, occlusion=occlusion,
                     obstacle_range_m=range_m, qr_staleness_s=staleness, familiarity=familiarity)
         lane, lane_steering = self._lane(analysis)
         return Perceived(cues=cues, lead=lead, alerts=tuple(reasons), facts=tuple(facts), analysis=analysis, lane=lane,
@@ -155,16 +158,17 @@ class Perception:
                          range_estimate=estimate, localisation=loc, timings_ms=timings)
 
     def _as_learnt(self, frame: object, analysis: FrameAnalysis | None, seen: FrameAnalysis,
-                   facts: list[str]) -> tuple[float, float, float]:
-        """(lane confidence, brightness, familiarity): as measured without a track profile (familiarity 1: the cue does
-        not apply); with one, read against it — and unknown (worst) when there was no picture to read."""
+                   facts: list[str]) -> tuple[float, float, float, float]:
+        """(lane confidence, brightness, occlusion, familiarity): as measured without a track profile (familiarity 1: the
+        cue does not apply); with one, read against it — and unknown (worst) when there was no picture to read."""
         if self.track is None:
-            return seen.lane_confidence, seen.brightness, 1.0
+            return seen.lane_confidence, seen.brightness, seen.occlusion, 1.0
         if analysis is None:
-            return seen.lane_confidence, seen.brightness, _NAN
-        learnt = read_as_learnt(self.track, frame, seen.lane_confidence, seen.brightness, self.normal_band)
+            return seen.lane_confidence, seen.brightness, seen.occlusion, _NAN
+        learnt = read_as_learnt(self.track, frame, seen.lane_confidence, seen.brightness, seen.occlusion, self.normal_band,
+                                self.occlusion_calm)
         facts.extend(learnt.facts)
-        return learnt.lane_confidence, learnt.brightness, learnt.familiarity
+        return learnt.lane_confidence, learnt.brightness, learnt.occlusion, learnt.familiarity
 
     def _clear_m(self, range_m: float, analysis: FrameAnalysis | None, obs: Observation) -> float:
         """How far ahead the path is known clear: to the obstacle in range; with nothing in range, as far as a range

@@ -143,10 +143,16 @@ class FearGuard:
         self._frame_steering = steer if isinstance(steer, FrameSteering) else None
         shared = self._frame_steering.pipeline if self._frame_steering is not None else None
         self.track = load_track(track) if isinstance(track, str | Path) else track
-        self.perception = Perception(self.vehicle, camera, shared, track=self.track, normal_band=self.rules.brightness_band)
+        self.perception = Perception(self.vehicle, camera, shared, track=self.track, normal_band=self.rules.brightness_band,
+                                     occlusion_calm=self._occlusion_calm())
         self.camera = self.perception.camera
         self._deadline = SteeringDeadline(steering_deadline_s) if steering_deadline_s is not None else None
         self._state = _State()
+
+    def _occlusion_calm(self) -> float:
+        """The top of the rule file's calm occlusion (a track profile maps normal driving's occlusion onto it)."""
+        var = self.rules.variables.get("occlusion")
+        return var.calm_core_top(0.0) if var is not None else 0.0
 
     def reset(self) -> None:
         """Forget all history (mode, timers, speed-limit ramp, trackers)."""

@@ -245,3 +245,33 @@ def test_any_frame_with_a_track_is_an_answer_never_an_internal_error(robocar_tra
         assert not any("internal error" in r for r in cmd.reasons), cmd.reasons
         fam = cmd.cues.familiarity
         assert math.isnan(fam) or 0.0 <= fam <= 1.0
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.floats(0.0, 0.5))
+def test_occlusion_read_against_normal_driving_keeps_more_hidden_more_hidden(robocar_track, a, b, usual, calm):
+    from dataclasses import replace
+
+    track = replace(robocar_track, occlusion_usual=usual)
+    lo, hi = track.occlusion_as_learnt(min(a, b), calm), track.occlusion_as_learnt(max(a, b), calm)
+    assert 0.0 <= lo <= hi <= 1.0 and track.occlusion_as_learnt(1.0, calm) == pytest.approx(1.0)
+    if usual <= calm:
+        assert (lo, hi) == (min(a, b), max(a, b))  # calm recordings: the cue as measured
+    else:
+        assert track.occlusion_as_learnt(min(usual, 0.99), calm) <= calm + 1e-6  # normal driving reads calm; 1 stays 1
+
+
+def test_where_the_lane_model_never_saw_the_track_familiarity_is_its_guidance(robocar_track, shared_data):
+    from dataclasses import replace
+
+    from fearguard.track.reading import read_as_learnt
+
+    frame = _frames(shared_data / ROBOCAR, 1400, 1401, 1)[0]
+    blind = replace(robocar_track, lane_confidence_median=0.0, occlusion_usual=1.0)
+    seen = replace(robocar_track, lane_confidence_median=0.8, occlusion_usual=0.6)
+    a = read_as_learnt(blind, frame, 0.0, 120.0, 1.0, (80.0, 180.0), 0.1)
+    assert a.lane_confidence == a.familiarity and a.occlusion == 0.0 and any("did not see" in f for f in a.facts)
+    b = read_as_learnt(seen, frame, 0.4, 120.0, 0.6, (80.0, 180.0), 0.1)
+    assert b.lane_confidence == pytest.approx(0.5) and b.occlusion == pytest.approx(0.1)
+    nan = read_as_learnt(blind, None, 0.0, 120.0, 1.0, (80.0, 180.0), 0.1)
+    assert math.isnan(nan.familiarity) and math.isnan(nan.lane_confidence) and math.isnan(nan.occlusion)

@@ -24,6 +24,14 @@ class Variable:
     shapes: dict[str, tuple[str, tuple[float, ...]]]
     normal_band: tuple[float, float] | None = None
 
+    def calm_core_top(self, calm: float) -> float:
+        """How far from ``calm`` (the cue's calmest value, at the bottom of the universe) the term that holds it stays
+        fully true: the top of that term's core (0 when no term is fully true there)."""
+        inside = float(np.clip(calm, self.universe[0], self.universe[-1]))
+        best = max(self.terms.values(), key=lambda m: float(np.interp(inside, self.universe, m)))
+        core = self.universe[(best >= 1.0 - 1e-9) & (self.universe >= inside)]
+        return float(core.max()) if core.size and float(np.interp(inside, self.universe, best)) >= 1.0 - 1e-9 else inside
+
 
 @dataclass(frozen=True)
 class Rule:

@@ -7,7 +7,8 @@ below ``MOVING_THROTTLE``) are not normal driving and are left out. From the res
 - the familiarity model (``profile.py``): weighted features, their principal components, a bank of learnt frames
   and the recordings' own distances for the calibration;
 - the normal light: the ``BAND_PERCENTILES`` of the brightness cue as the camera pipeline measures it;
-- the camera's lane confidence on this track (its median), and the colours of the track's markings.
+- the camera's lane confidence on this track (its median), how much of the marking region its occlusion measure calls
+  hidden in normal driving (``OCCLUSION_PERCENTILE``), and the colours of the track's markings.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from fearguard.track.features import frame_features
 from fearguard.track.profile import (
     BAND_PERCENTILES,
     CALIBRATION_GAP_S,
+    OCCLUSION_PERCENTILE,
     NEIGHBOURS,
     TrackProfile,
     block_weights,
@@ -76,6 +78,7 @@ class _Frames:
     t_s: list[float]
     brightness: list[float]
     lane: list[float]
+    occlusion: list[float]
     marking_pixels: list[np.ndarray]
     typical: list[np.ndarray]
 
@@ -83,7 +86,7 @@ class _Frames:
 def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnOptions(),
                 on_frame: Callable[[int], None] | None = None) -> Learnt:
     """Learn a profile from recordings of normal driving (raises ``FearguardError`` when there is too little)."""
-    got = _Frames([], [], [], [], [], [], [])
+    got = _Frames([], [], [], [], [], [], [], [])
     read = standing = skipped = 0
     for rec_id, path in enumerate(recordings):
         source = open_recording(path, options.fps)
@@ -110,6 +113,7 @@ def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnO
                 a = pipeline.process(frame.image_bgr, frame.t_s)
                 got.brightness.append(a.brightness)
                 got.lane.append(a.lane_confidence)
+                got.occlusion.append(a.occlusion)
                 got.marking_pixels.append(_contrast_pixels(frame.image_bgr))
                 if len(got.typical) < 64:
                     got.typical.append(frame.image_bgr)
@@ -150,11 +154,13 @@ def _fit(got: _Frames, source: str) -> TrackProfile:
     b = np.array([x for x in got.brightness if math.isfinite(x)])
     band = tuple(float(v) for v in np.percentile(b, BAND_PERCENTILES)) if b.size else (0.0, 255.0)
     lanes = np.array([x for x in got.lane if math.isfinite(x)])
+    occ = np.array([x for x in got.occlusion if math.isfinite(x)])
     return TrackProfile(
         source=source, frames_learnt=len(feats), mean=mean, weights=weights, basis=basis, bank=bank,
         calibration_distances=np.sort(calib), brightness_band=(band[0], band[1]),
         lane_confidence_median=float(np.median(lanes)) if lanes.size else math.nan,
         marking_colours_bgr=_marking_colours(got.marking_pixels),
+        occlusion_usual=float(np.percentile(occ, OCCLUSION_PERCENTILE)) if occ.size else math.nan,
     )
 
 

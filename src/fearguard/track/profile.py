@@ -34,6 +34,7 @@ REFERENCE_PERCENTILE = 95.0  # [%] of the recordings' own distances: up to here 
 UNFAMILIAR_RATIO = 2.0  # [-] d / d_ref at which familiarity reaches 0 (unfamiliar)
 CALIBRATION_GAP_S = 2.0  # [s] a calibration frame is compared only with learnt frames further away in time than this
 BAND_PERCENTILES = (2.0, 98.0)  # [%] of the recordings' brightness: the learnt normal light
+OCCLUSION_PERCENTILE = 90.0  # [%] of the recordings' occlusion cue: as much of the marking region as normal driving hides
 FEATURE_COUNT = int(sum(BLOCK_SIZES))
 BAND_EDGE = 0.5  # [grey levels] the learnt band is kept this far from 0, 255 and itself when it is read
 
@@ -52,6 +53,7 @@ class TrackProfile:
     brightness_band: tuple[float, float]  # [grey level 0..255] the learnt normal light (BAND_PERCENTILES of the cue)
     lane_confidence_median: float  # [0..1] the camera's lane confidence on the recordings (NaN: not measured)
     marking_colours_bgr: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) the track's markings, typical BGR
+    occlusion_usual: float = math.nan  # [0..1] the OCCLUSION_PERCENTILE of the occlusion cue on the recordings (NaN: not measured)
 
     @property
     def reference_distance(self) -> float:
@@ -114,6 +116,19 @@ class TrackProfile:
         return float(np.interp(brightness, [0.0, lo, hi, 255.0], [0.0, n_lo, n_hi, 255.0]))
 
 
+    def occlusion_as_learnt(self, occlusion: float, calm_top: float) -> float:
+        """The occlusion cue read against the recordings: up to what normal driving on this track showed
+        (``occlusion_usual``) maps onto the rule file's calm term (0..``calm_top``), the rest linearly up to 1 (monotone,
+        0 and 1 fixed). Where the camera's marking region is mostly "hidden" on every normal frame (the lane model does
+        not find this track's guidance) the cue carries nothing, and it must not stop the car; on a track where normal
+        driving shows it calm (usual ≤ calm_top) it is unchanged."""
+        usual = self.occlusion_usual
+        if not math.isfinite(occlusion) or not math.isfinite(usual) or usual <= calm_top:
+            return occlusion
+        usual = min(usual, 1.0 - BAND_EDGE / 255.0)
+        return float(np.interp(occlusion, [0.0, usual, 1.0], [0.0, calm_top, 1.0]))
+
+
 def load_track(path: str | Path) -> TrackProfile:
     """A profile written by ``fearguard learn``; a wrong file is a ``FileError`` naming the file and the key."""
     p = Path(path)
@@ -159,11 +174,16 @@ def profile_from_arrays(data: dict[str, np.ndarray], where: str) -> TrackProfile
     if not 0.0 <= band[0] <= band[1] <= 255.0:
         raise FileError(where, "brightness_band", f"expected 0 ≤ low ≤ high ≤ 255, got {band.tolist()}")
     lane = data.get("lane_confidence_median", np.array(math.nan))
+    occ = data.get("occlusion_usual", np.array(math.nan))
+    occ_usual = float(occ) if np.ndim(occ) == 0 and occ.dtype.kind in "fiu" else math.nan
+    if not (math.isnan(occ_usual) or 0.0 <= occ_usual <= 1.0):
+        raise FileError(where, "occlusion_usual", f"expected a share 0..1 (or NaN), got {occ_usual!r}")
     colours = need("marking_colours_bgr", 2, 3) if "marking_colours_bgr" in data else np.zeros((0, 3))
     return TrackProfile(
         source=str(data.get("source", "")), frames_learnt=int(need("frames_learnt", 0)), mean=mean, weights=weights,
         basis=basis, bank=bank, calibration_distances=np.sort(calib), brightness_band=(float(band[0]), float(band[1])),
-        lane_confidence_median=float(lane) if np.ndim(lane) == 0 else math.nan, marking_colours_bgr=colours,
+        lane_confidence_median=float(lane) if np.ndim(lane) == 0 and lane.dtype.kind in "fiu" else math.nan,
+        marking_colours_bgr=colours, occlusion_usual=occ_usual,
     )
 
 
@@ -177,7 +197,7 @@ def save_track(profile: TrackProfile, path: str | Path) -> Path:
             frames_learnt=np.array(profile.frames_learnt), mean=profile.mean, weights=profile.weights, basis=profile.basis,
             bank=profile.bank, calibration_distances=profile.calibration_distances,
             brightness_band=np.array(profile.brightness_band), lane_confidence_median=np.array(profile.lane_confidence_median),
-            marking_colours_bgr=profile.marking_colours_bgr,
+            marking_colours_bgr=profile.marking_colours_bgr, occlusion_usual=np.array(profile.occlusion_usual),
         )
     return p
 

@@ -20,14 +20,17 @@ class AsLearnt:
     familiarity: float
     brightness: float
     lane_confidence: float
+    occlusion: float
     facts: tuple[str, ...]
 
 
-def read_as_learnt(profile: TrackProfile, frame: object, lane_confidence: float, brightness: float,
-                   normal_band: tuple[float, float]) -> AsLearnt:
+def read_as_learnt(profile: TrackProfile, frame: object, lane_confidence: float, brightness: float, occlusion: float,
+                   normal_band: tuple[float, float], occlusion_calm: float) -> AsLearnt:
     """Familiarity of the frame; brightness with the learnt light band mapped onto the rule file's normal band; the lane
     confidence relative to what the camera's lane model reads on this track — or, where it never saw this track's
-    guidance on the recordings, how like the learnt track the picture is (the only guidance measure that track has)."""
+    guidance on the recordings, how like the learnt track the picture is (the only guidance measure that track has: the
+    occlusion, measured over that model's marking region, then counts through it and reads 0); otherwise the occlusion
+    relative to what normal driving on this track showed (``TrackProfile.occlusion_as_learnt``)."""
     fam, why = profile.familiarity(frame)
     facts = [why] if why else []
     lo, hi = profile.brightness_band
@@ -36,10 +39,14 @@ def read_as_learnt(profile: TrackProfile, frame: object, lane_confidence: float,
         side = "below" if brightness < lo else "above"
         facts.append(f"track: brightness {brightness:.0f} {side} the learnt band {lo:.0f}–{hi:.0f}: read as {b:.0f}")
     seen = profile.lane_confidence_median
-    if math.isfinite(seen) and seen >= LANE_SEEN:
-        lane = min(1.0, lane_confidence / seen) if math.isfinite(lane_confidence) else lane_confidence
-    else:
-        lane = fam
+    if not (math.isfinite(seen) and seen >= LANE_SEEN):
         facts.append(f"track: the camera's lane model did not see this track's guidance on the recordings (median confidence "
-                     f"{seen:.2f}): the lane cue reads how like the learnt track the picture is ({fam:.2f})")
-    return AsLearnt(fam, b, lane, tuple(facts))
+                     f"{seen:.2f}): the lane cue reads how like the learnt track the picture is ({fam:.2f}); occlusion, "
+                     f"measured over that model's marking region, counts through it too (0 here)")
+        return AsLearnt(fam, b, fam, 0.0 if math.isfinite(fam) else fam, tuple(facts))
+    lane = min(1.0, lane_confidence / seen) if math.isfinite(lane_confidence) else lane_confidence
+    occ = profile.occlusion_as_learnt(occlusion, occlusion_calm)
+    if math.isfinite(occlusion) and occ != occlusion:
+        facts.append(f"track: occlusion {occlusion:.2f} read against {profile.occlusion_usual:.2f} in normal driving on the "
+                     f"recordings: {occ:.2f}")
+    return AsLearnt(fam, b, lane, occ, tuple(facts))
