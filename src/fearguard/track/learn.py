@@ -29,8 +29,8 @@ from fearguard.track.features import frame_features
 from fearguard.track.profile import (
     BAND_PERCENTILES,
     CALIBRATION_GAP_S,
-    OCCLUSION_PERCENTILE,
     NEIGHBOURS,
+    OCCLUSION_PERCENTILE,
     TrackProfile,
     block_weights,
 )
