@@ -260,14 +260,14 @@ class Engine:
 
     # -- vector path -------------------------------------------------------------------------
     def group_fears_batch(self, x: np.ndarray, only: int | None = None) -> np.ndarray:
-        """(N, 5) cues with unknowns already replaced → (N, n_groups) fear per group (or one group's)."""
+        """(N, 6) cues with unknowns already replaced → (N, n_groups) fear per group (or one group's)."""
         out = np.empty((len(x), len(self.group_names) if only is None else 1))
         for start in range(0, len(x), CHUNK_ROWS):
             out[start : start + CHUNK_ROWS] = self._infer_block(x[start : start + CHUNK_ROWS], only).T
         return out
 
     def alpha_batch(self, x: np.ndarray, only: int | None = None) -> np.ndarray:
-        """Activation of every fear level per group: (N, 5) → (n_groups or 1, n_levels, N)."""
+        """Activation of every fear level per group: (N, 6) → (n_groups or 1, n_levels, N)."""
         mem: Memberships = [None] * len(CUE_NAMES)
         for i, sampled in self.inputs:
             mem[i] = sampled.grades_batch(x[:, i])
