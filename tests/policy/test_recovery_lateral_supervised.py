@@ -71,7 +71,7 @@ def test_a_creep_needs_the_path_known_clear_not_the_lane_in_sight() -> None:
         rows = obey(guarded(), [(0.1, CALM, True)] * 10 + [(0.1, lost, True)] * 60)
         creeping = [r for r in rows if any(CREEP in x for x in r[5].reasons)]
         assert creeping and all(r[5].strategy is fg.Strategy.CRAWL for r in creeping)
-        assert any("creep steering by the estimator within ±15 deg: +2.0 deg" in x for r in creeping for x in r[5].reasons)
+        assert any("creep steering by the estimator within ±6 deg: +2.0 deg" in x for r in creeping for x in r[5].reasons)
 
 
 def test_no_creep_with_an_obstacle_near_or_an_unknown_range_or_after_a_fault() -> None:

@@ -50,7 +50,7 @@ class PolicyConfig:
     standstill_mps: float = 0.05  # [m/s] at or below this the car counts as standing still
     recovery_min_confidence: float = 0.25  # [-] lane_confidence from which a creep steers by the lane seen now
     recovery_blind_m: float = 0.3  # [m] creep distance with nothing of the lane in sight, per EMERGENCY
-    recovery_creep_max_deg: float = 15.0  # [deg] a creep steered by the wrapped estimator stays within ± this
+    recovery_creep_max_deg: float = 6.0  # [deg] a creep steered by the wrapped estimator stays within ± this
     road_enter_s: float = 0.5  # [s] a road-picture-only emergency with the path known clear waits this long, in CAUTION
     road_doubt_fraction: float = 0.4  # [-] of max speed while it waits (a flickering picture: slow down, do not stop)
     stop_line_wait_s: float = 0.0  # [s] standing before a stop line before crossing (0: stop lines are not stopped for)
