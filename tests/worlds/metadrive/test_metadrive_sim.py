@@ -136,3 +136,16 @@ def test_a_stopped_car_stands_in_the_lane_where_it_was_asked_for() -> None:
     assert start.gap_m == pytest.approx(35.0, abs=0.1) and start.lead_speed_mps == pytest.approx(0.0, abs=0.01)
     assert after.gap_m == pytest.approx(35.0 - (after.progress_m - start.progress_m), abs=0.5) and after.gap_m < 32.0
     assert abs(after.lead_speed_mps) < 0.01 and not after.crashed
+
+
+def test_a_drive_runs_in_a_dask_worker_as_metadrive_suite_jobs_runs_it(tmp_path: Path) -> None:
+    """`metadrive-suite --jobs N` runs each drive in a worker process of a real Dask LocalCluster, on a worker thread:
+    Panda3D's per-frame SIGINT handler (main thread only) once failed every such drive at its reset."""
+    from fearguard.drive.cluster import DaskExecutor
+    from fearguard.worlds.metadrive.suite import plan, run_suite
+
+    specs = plan([1], 0.5, (), (), out_dir=tmp_path, controllers=("guarded",))
+    _, interrupted = run_suite(tmp_path, specs, executor=DaskExecutor(jobs=1))
+    rows = [json.loads(line) for line in (tmp_path / "runs.jsonl").read_text().splitlines()]
+    assert not interrupted and [r["controller"] for r in rows] == ["expert", "guarded"]  # a failed drive raises here
+    assert all(r["progress_m"] > 0 and r["crashes"] == 0 for r in rows)

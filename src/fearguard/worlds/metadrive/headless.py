@@ -18,7 +18,12 @@ environment is created, without editing installed files:
   1.35 → 1.05 s a step on a loaded machine): after the reset every texture's anisotropic degree is set to 1, the
   PSSM shadow buffer is switched off and the terrain shader told so (``after_reset``). Without it the road reads
   lighter (grey ~145 against ~120 in the road region at noon): MetaDrive's shadow pass darkened the whole road;
-- ``multi_thread_render=False`` (``ENGINE_SETTINGS``); cameras from 160×120 up (a 64×48 camera hung).
+- ``multi_thread_render=False`` (``ENGINE_SETTINGS``); cameras from 160×120 up (a 64×48 camera hung);
+- **no SIGINT handler per frame**: Panda3D's task manager swaps in its own SIGINT handler around every step, which
+  Python allows only on the main thread — a drive in a Dask worker (``metadrive-suite --jobs``; tasks run on a worker
+  thread) failed at the first reset with "signal only works in main thread" — and which, on the main thread, turned
+  Ctrl-C into a KeyboardInterrupt after the frame instead of fearguard's own graceful stop (``drive/interrupt.py``).
+  ``direct.task.Task.signal = None`` is Panda3D's own switch for platforms without signals.
 """
 
 from __future__ import annotations
@@ -64,6 +69,7 @@ def simulator() -> Any:
     if _PATCHED:
         return metadrive
     from direct.filter.FilterManager import FilterManager
+    from direct.task import Task
     from metadrive.engine.core import engine_core, terrain
     from panda3d.core import loadPrcFileData
 
@@ -89,6 +95,7 @@ def simulator() -> Any:
 
     FilterManager.createBuffer = buffer_without_msaa
 
+    Task.signal = None  # Panda3D's "no signals here" switch: its per-frame SIGINT handler (main thread only) is skipped
     terrain.TerrainProperty.get_semantic_map_pixel_per_meter = classmethod(lambda cls: PIXELS_PER_M)
     for name in ("metadrive", "panda3d"):
         logging.getLogger(name).setLevel(logging.ERROR)
