@@ -53,15 +53,38 @@ def test_a_flickering_road_picture_with_the_path_clear_is_caution_not_a_string_o
     assert 0.1 * entered >= cfg.road_enter_s - 1e-9 and lasting[-1].strategy is fg.Strategy.STOP
 
 
-def test_no_grace_without_a_clear_path_or_with_the_camera_lost(rules) -> None:
-    camera_only = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=fg.VehicleLimits())  # inf: nothing known ahead
-    assert [c.mode for c in drive(camera_only, LOST, 0.0, 0.3)][-1] is fg.Mode.EMERGENCY
+def test_no_grace_for_a_standing_car_without_a_clear_path_or_with_the_camera_lost(rules) -> None:
+    standing = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=fg.VehicleLimits())  # inf: nothing known ahead
+    assert drive(standing, LOST, 0.0, 0.3, speed=0.0)[-1].mode is fg.Mode.EMERGENCY  # a standing car does not start
+    unmeasured = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=fg.VehicleLimits())  # never told to move, no speed
+    cmds = drive(unmeasured, LOST, 0.0, rules.policy.road_enter_s + 0.5, speed=math.nan)
+    first = cmds[rules.policy.enter_frames - 1].speed_limit_mps  # the ramp's first steps before the picture is judged
+    assert first <= 0.1 and all(c.speed_limit_mps <= first + 1e-12 for c in cmds[rules.policy.enter_frames - 1 :])
+    assert cmds[-1].mode is fg.Mode.EMERGENCY and cmds[-1].speed_limit_mps == 0.0
     blind = dataclasses.replace(LOST, lane_confidence=math.nan, brightness=math.nan, occlusion=math.nan)
     sensor_car = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=CAR)
     assert [c.mode for c in drive(sensor_car, blind, 0.0, 0.3)][-1] is fg.Mode.EMERGENCY
     for light in (2.0, 250.0):  # black or blinding: the brightness alone demands an emergency, no flicker to wait out
         lit = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=CAR)
         assert [c.mode for c in drive(lit, dataclasses.replace(LOST, brightness=light), 0.0, 0.3)][-1] is fg.Mode.EMERGENCY
+
+
+@pytest.mark.parametrize("speed", [0.3, 1.2, math.nan])
+def test_a_moving_car_that_knows_nothing_of_the_path_slows_through_a_flicker_and_never_speeds_up(rules, speed: float) -> None:
+    """Without a range sensor or a camera object search (a dash-cam replay, a camera-only Donkey car) a flicker is
+    CAUTION too, but only for a car already moving, and its limit never rises above the speed it has (NaN: not
+    measured, as on a Donkey car without an encoder: the limit it was last given)."""
+    cfg = rules.policy
+    camera_only = fg.FearGuard(lambda frame: 5.0, rules=rules, vehicle=fg.VehicleLimits())
+    last = drive(camera_only, CALM, 0.0, 3.0, speed=speed)[-1].speed_limit_mps
+    flicker = drive(camera_only, LOST, 3.0, cfg.road_enter_s - 0.1, speed=speed)
+    assert fg.Mode.EMERGENCY not in [c.mode for c in flicker]
+    doubt = [c for c in flicker if any("a flicker is not one" in r for r in c.reasons)]
+    now = last if math.isnan(speed) else speed
+    assert doubt and all(c.speed_limit_mps <= now + 1e-12 for c in doubt)
+    assert all("nothing is known about the path ahead" in " ".join(c.reasons) for c in doubt)
+    lasting = drive(camera_only, LOST, 3.0 + cfg.road_enter_s - 0.1, 1.0, speed=speed)
+    assert lasting[-1].mode is fg.Mode.EMERGENCY and lasting[-1].speed_limit_mps == 0.0
 
 
 def test_calm_drive_is_normal_pass_through_and_ramps_up(guard) -> None:

@@ -296,7 +296,10 @@ class FearGuard:
         clear_m = max(self._clear_m(cues, perceived, range_m), st.stop_line.clear_left_m())  # crossing: as known at the stop
         over = frozenset(c for c, f in result.cause_fears.items() if f >= cfg.emergency_enter_fear)
         over |= {Cause.COLLISION} if imminent else set()
-        grace = self._grace_s(over, imminent, cues, clear_m, lead)
+        path_doubt = creep_clearance(clear_m, cfg, v)  # "" when the path ahead is known clear for a creep
+        # how fast the car goes now: measured, else the limit it was last given (never told to move: standing)
+        now_mps = speed if speed is not None else (st.limit_mps if st.limit_mps is not None else 0.0)
+        grace = self._grace_s(over, imminent, cues, path_doubt, now_mps, lead)
         st.mode, event = next_mode(st.mode, result.fear, t, at_once=imminent, cfg=cfg, cause_fears=result.cause_fears, over=over,
                                    grace_s=grace)
         dt = 0.0 if st.last_t_s is None else t - st.last_t_s
@@ -310,7 +313,7 @@ class FearGuard:
         choice = lane_step(check, st.estimator_distrusted, steering, lane_now, st.trusted_steering_deg, cfg, v)
         st.estimator_distrusted = choice.distrusted
         wanted, strategy = choice.steering_deg, Strategy.PASS_THROUGH
-        caps = [fear_limit, envelope.speed_mps, choice.cap_mps, self._grace_cap(grace, t, reasons)]
+        caps = [fear_limit, envelope.speed_mps, choice.cap_mps, self._grace_cap(grace, t, reasons, path_doubt, now_mps)]
         line_m = perceived.stop_line_m if perceived is not None else None
         st.stop_line, line_cap, line_why = next_stop_line(st.stop_line, line_m, speed_now, t, dt, cfg, v, clear_m)
         caps.append(line_cap)
@@ -388,26 +391,34 @@ class FearGuard:
             return range_m
         return self.vehicle.ultrasonic_max_range_m if self.vehicle.has_ultrasonic else 0.0
 
-    def _grace_s(self, over: frozenset[Cause], imminent: bool, cues: Cues, clear_m: float, lead: Lead | None) -> float:
-        """A road picture that flickers is CAUTION, not a string of emergencies: entering EMERGENCY for the road picture
-        alone waits ``road_enter_s`` when the path is known clear and the picture is measured. An unknown picture (a
-        lost camera) and one whose brightness alone demands an emergency (black, or blinding glare) are no flicker. With a
-        lead to follow there is no wait: following it is the better guide than a picture in doubt."""
+    def _grace_s(
+        self, over: frozenset[Cause], imminent: bool, cues: Cues, path_doubt: str, now_mps: float, lead: Lead | None,
+    ) -> float:
+        """A road picture that flickers is CAUTION, not a string of emergencies (issue 35): entering EMERGENCY for the road
+        picture alone, measured, waits ``road_enter_s``. With the path ahead known clear the car may go on at the doubt
+        speed meanwhile; with nothing known about it (no range sensor, no camera object search) only a car already
+        moving gets the wait, and only to slow down (``_grace_cap``): a standing car does not start on a picture in
+        doubt. An unknown picture (a lost camera) and one whose brightness alone demands an emergency (black, or
+        blinding glare) are no flicker. With a lead to follow there is no wait: following it is the better guide than
+        a picture in doubt."""
         cfg = self.rules.policy
         measured = all(unknown_note(name, getattr(cues, name)) is None for name in ("lane_confidence", "brightness", "occlusion"))
         following = lead is not None and lead.usable
-        if over != {Cause.ROAD} or imminent or following or not measured or creep_clearance(clear_m, cfg, self.vehicle):
+        if over != {Cause.ROAD} or imminent or following or not measured:
+            return 0.0
+        if path_doubt and not now_mps > 0.0:
             return 0.0
         light_alone = replace(Cues(*calm_values(self.rules.brightness_band)), brightness=cues.brightness)
         if self.rules.evaluate(light_alone).fear >= cfg.emergency_enter_fear:
             return 0.0
-        if self._state.stop_line.crossed_m is not None:
+        if self._state.stop_line.crossed_m is not None and not path_doubt:
             return math.inf  # crossing after a served stop line: the markings are missing there by design
         return cfg.road_enter_s
 
-    def _grace_cap(self, grace: float, t: float, reasons: list[str]) -> float:
+    def _grace_cap(self, grace: float, t: float, reasons: list[str], path_doubt: str, now_mps: float) -> float:
         """While a grace runs (the picture untrusted for enter_frames and more, not yet for ``road_enter_s``): CAUTION at
-        ``road_doubt_fraction`` of the top speed."""
+        ``road_doubt_fraction`` of the top speed; with nothing known about the path ahead, never faster than now (the
+        measured speed; unmeasured: the limit last given, which the car does not exceed)."""
         st, cfg = self._state, self.rules.policy
         if not (grace > 0.0 and st.mode.mode is not Mode.EMERGENCY and st.mode.frames_over >= cfg.enter_frames
                 and st.mode.over_since_s is not None):
@@ -415,9 +426,14 @@ class FearGuard:
         cap = cfg.road_doubt_fraction * self.vehicle.max_speed_mps
         if math.isinf(grace):
             reasons.append(f"crossing after a stop line, the markings missing, the path clear as seen at the stop: {cap:.2f} m/s")
+            return cap
+        waited = f"road picture not trusted for {t - st.mode.over_since_s:.1f} of {grace:g} s"
+        if path_doubt:
+            cap = min(cap, now_mps)
+            reasons.append(f"{waited}, {path_doubt}: slowing, never faster than now ({cap:.2f} m/s), before an emergency "
+                           "(a flicker is not one)")
         else:
-            reasons.append(f"road picture not trusted for {t - st.mode.over_since_s:.1f} of {grace:g} s with the path clear: "
-                           f"slowing to {cap:.2f} m/s before an emergency (a flicker is not one)")
+            reasons.append(f"{waited} with the path clear: slowing to {cap:.2f} m/s before an emergency (a flicker is not one)")
         return cap
 
     def _steer_out(self, wanted: float, dt: float, reasons: list[str]) -> float:
