@@ -140,9 +140,15 @@ def test_a_stopped_car_stands_in_the_lane_where_it_was_asked_for() -> None:
 
 def test_a_drive_runs_in_a_dask_worker_as_metadrive_suite_jobs_runs_it(tmp_path: Path) -> None:
     """`metadrive-suite --jobs N` runs each drive in a worker process of a real Dask LocalCluster, on a worker thread:
-    Panda3D's per-frame SIGINT handler (main thread only) once failed every such drive at its reset."""
+    Panda3D's per-frame SIGINT handler (main thread only) once failed every such drive at its reset, and a process that
+    had driven before could start no worker at all (MetaDrive's PYTHONUTF8=on, which Python rejects in a child)."""
+    import os
+
     from fearguard.drive.cluster import DaskExecutor
     from fearguard.worlds.metadrive.suite import plan, run_suite
+
+    MetaDriveWorld(Scenario(seed=1, traffic_density=0.0)).close()  # this process has driven before (a rendered world)
+    assert os.environ.get("PYTHONUTF8") in (None, "0", "1")
 
     specs = plan([1], 0.5, (), (), out_dir=tmp_path, controllers=("guarded",))
     _, interrupted = run_suite(tmp_path, specs, executor=DaskExecutor(jobs=1))

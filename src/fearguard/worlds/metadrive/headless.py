@@ -23,7 +23,11 @@ environment is created, without editing installed files:
   Python allows only on the main thread — a drive in a Dask worker (``metadrive-suite --jobs``; tasks run on a worker
   thread) failed at the first reset with "signal only works in main thread" — and which, on the main thread, turned
   Ctrl-C into a KeyboardInterrupt after the frame instead of fearguard's own graceful stop (``drive/interrupt.py``).
-  ``direct.task.Task.signal = None`` is Panda3D's own switch for platforms without signals.
+  ``direct.task.Task.signal = None`` is Panda3D's own switch for platforms without signals;
+- **a child-safe environment** (``repair_child_environment``): MetaDrive's asset loader sets ``PYTHONUTF8=on`` in the
+  process environment when an engine starts; Python accepts only 0 or 1 there, so every process started afterwards
+  died at start-up ("invalid PYTHONUTF8 environment variable value") — the Dask workers of a suite started in a
+  process that had driven before (CI's test session). It becomes 1, the UTF-8 mode MetaDrive meant.
 """
 
 from __future__ import annotations
@@ -33,6 +37,7 @@ import importlib
 import importlib.util
 import io
 import logging
+import os
 from typing import Any
 
 from fearguard.errors import SimulatorMissing  # defined in errors.py, importable here
@@ -101,6 +106,12 @@ def simulator() -> Any:
         logging.getLogger(name).setLevel(logging.ERROR)
     _PATCHED = True
     return metadrive
+
+
+def repair_child_environment() -> None:
+    """``PYTHONUTF8=on`` (MetaDrive's, at engine start) → ``1``: Python rejects "on" in every child process."""
+    if os.environ.get("PYTHONUTF8") == "on":
+        os.environ["PYTHONUTF8"] = "1"
 
 
 def after_reset(engine: Any) -> None:
