@@ -321,7 +321,7 @@ class FearGuard:
         mode = Mode.CAUTION if choice.caution and st.mode.mode is Mode.NORMAL else st.mode.mode
         reasons.extend([choice.reason] if choice.reason else [])
         if st.mode.mode is Mode.EMERGENCY:
-            plan = self._emergency(result, lead, imminent, clear_m, cues, perceived, t, dt, speed_now, wanted, steering)
+            plan = self._emergency(result, lead, imminent, path_doubt, cues, perceived, t, dt, speed_now, wanted, steering)
             strategy, cause, wanted = plan.strategy, plan.cause or cause, plan.steering_deg
             caps.append(plan.cap_mps)
             reasons.extend(plan.reasons)
@@ -347,15 +347,14 @@ class FearGuard:
         )
 
     def _emergency(
-        self, result: FearResult, lead: Lead | None, imminent: bool, clear_m: float, cues: Cues, perceived: Perceived | None,
+        self, result: FearResult, lead: Lead | None, imminent: bool, unclear: str, cues: Cues, perceived: Perceived | None,
         t: float, dt: float, speed_now: float, wanted: float, steering: float,
     ) -> EmergencyChoice:
         """In EMERGENCY: advance the recovery (a creep after a road-picture stop, when the path ahead is known clear), then
-        the plan of the active causes."""
+        the plan of the active causes. ``unclear``: why the path is not known clear for a creep ("" when it is)."""
         st, cfg, v = self._state, self.rules.policy, self.vehicle
         active = active_causes(result.cause_fears, st.mode, cfg)
         road_stop = recovery_eligible(st.mode, active, lead, imminent)
-        unclear = creep_clearance(clear_m, cfg, v)
         confidence = finite_reading(cues.lane_confidence)
         seen = confidence is not None and confidence >= cfg.recovery_min_confidence  # a lane this faint steers nothing
         st.recovery, creep = next_recovery(st.recovery, road_stop and not unclear, t, dt, speed_now, cfg, blind=not seen)

@@ -186,11 +186,11 @@ class MetaDriveWorld:
             with contextlib.redirect_stdout(io.StringIO()):
                 obs, _ = self.env.reset()
         except Exception as exc:  # MetaDrive's map generator asserts on impossible block strings
-            repair_child_environment()
             self.close()
             raise MapError(f"MetaDrive could not build map {s.map_blocks!r} with {s.lanes} lanes (seed {s.seed}): "
                            f"{type(exc).__name__}: {exc}") from None
-        repair_child_environment()  # the engine has started: MetaDrive set PYTHONUTF8=on
+        finally:
+            repair_child_environment()  # the engine has started: MetaDrive set PYTHONUTF8=on
         self.ego = self.env.agent
         if s.render:
             after_reset(self.env.engine)
