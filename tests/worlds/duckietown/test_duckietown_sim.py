@@ -212,6 +212,25 @@ def test_on_a_curve_the_duck_is_no_centre_line_and_the_robot_stops_once_well_sho
     assert s["collisions"] == 0 and s["departures"] == 0
 
 
+@pytest.mark.parametrize(("town", "ahead_m", "seconds"), [("ETH_small_intersect", 3.1, 24.0), ("TTIC_ripltown", 1.85, 18.0)])
+def test_a_duck_on_a_town_crossing_is_stopped_for_and_the_robot_goes_on(tmp_path: Path, town: str, ahead_m: float,
+                                                                         seconds: float) -> None:
+    """Issue 35: where the tape ends the robot crosses at creep speed on what its search saw clear; a duck standing on
+    the crossing itself (the middle of the intersection tile) must still be stopped for, and passed once taken away."""
+    s = drive(DriveOptions(town, seconds=seconds, obstacle="duck", ahead_m=ahead_m, plots=False), tmp_path).summary
+    w = DuckietownWorld(town, width_px=160, height_px=120, seed=0)
+    try:
+        x, z = s["obstacle_xz_m"]
+        tile = w.env._get_tile(*w.env.get_grid_coords(np.array([x, 0.0, z])))
+    finally:
+        w.close()
+    assert tile is not None and "way" in tile["kind"], tile  # 3way_left / 3way_right / 4way: the duck is on the crossing
+    ob = s["obstacle"]
+    assert not ob["contact"] and ob["stopped_before_contact"] and ob["went_on"]
+    assert ob["min_gap_m"] >= 0.15
+    assert s["collisions"] == 0 and s["departures"] == 0
+
+
 @pytest.mark.parametrize(("town", "start_m", "end_m"), [("ETH_small_intersect", 2.3, 2.6), ("TTIC_ripltown", 1.7, 1.95)])
 def test_a_red_stop_line_across_the_lane_is_paint_not_an_object(town: str, start_m: float, end_m: float) -> None:
     """Issue 35: approaching an intersection, the red stop line across the lane was read as an object 0.21 m ahead and
