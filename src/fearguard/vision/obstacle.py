@@ -25,7 +25,6 @@ from fearguard.vision.occlusion import (
     COLOUR_SAT_MIN,
     DARKER,
     FOREIGN_DEV_MIN,
-    ROUGH_MIN,
     SAT_DEV,
     SMOOTH_SHARE,
     SMOOTHER_SHARE,
@@ -78,7 +77,7 @@ def foreign_mask(maps: SurfaceMaps, road: RoadAppearance, columns: slice = slice
     lit = grey >= SHADE_SAT_GATE * ref  # HLS saturation of dark pixels is unstable: a shadow is no coloured object
     coloured = lit & ((sat >= COLOUR_SAT_MIN) | (np.abs(sat - road.saturation) >= SAT_DEV))
     foreign = coloured | (off & (grey < DARKER * ref))
-    if road.roughness >= ROUGH_MIN:
+    if road.textured:
         if smooth_objects:
             foreign |= rough < SMOOTH_SHARE * road.roughness
         foreign |= off & (grey > BRIGHTER * ref) & (rough < SMOOTHER_SHARE * road.roughness)

@@ -37,7 +37,10 @@ SAT_DEV = 70  # [0..255] a saturation this far from the road's is a coloured obj
 YELLOW_HUE = (14, 40)  # [OpenCV hue 0..180] yellow paint is not car paint
 SMOOTH_SHARE = 0.35  # [-] a patch with less than this share of the road's roughness is a smooth object ...
 SMOOTHER_SHARE = 0.6  # [-] a brighter patch with less than this share of the road's roughness is a pale object
-ROUGH_MIN = 0.004  # [-] ... when the road itself is measurably rough (a rendered road may be flat)
+ROUGH_MIN = 0.004  # [-] ... when the road itself is measurably rough (a rendered road may be flat) ...
+ROUGH_MIN_LEVELS = 0.5  # [grey levels] ... and its texture stands above quantisation: a mean neighbour difference under half
+#   a grey level is fewer than half the pairs one level apart (a flat road's noise); the ratio alone grows as the light
+#   dims, and a dark, flat rendered road at night read as rough made its every smooth patch an object
 DIFF_CLIP_PX = 8.0  # [grey levels] roughness counts a neighbour difference up to this (beyond: an edge, not texture)
 ROW_SAMPLES = 15  # [-] points across the road (ego lane ± a lane width) that give a row's road grey
 ROW_UNIFORM = 0.8  # [-] share of a row's points close to its median for the row to count as all road
@@ -66,6 +69,11 @@ class RoadAppearance:
         g = max(self.grey, 1.0) / max(other.grey, 1.0)
         r = max(self.roughness, 1e-4) / max(other.roughness, 1e-4)
         return 1 / MODEL_GREY_RATIO <= g <= MODEL_GREY_RATIO and 1 / MODEL_ROUGH_RATIO <= r <= MODEL_ROUGH_RATIO
+
+    @property
+    def textured(self) -> bool:
+        """Rough enough that a smooth patch on it is something else (ROUGH_MIN, and ROUGH_MIN_LEVELS in grey levels)."""
+        return self.roughness >= ROUGH_MIN and self.roughness * self.grey >= ROUGH_MIN_LEVELS
 
 
 class RoadModel:
@@ -223,7 +231,7 @@ def hidden_at(
     grey, rough, sat, hue = maps.grey[r, u], maps.roughness[r, u], maps.saturation[r, u], maps.hue[r, u]
     ref = max(road.grey, 1.0)
     off_grey = np.abs(grey - ref) >= FOREIGN_DEV_MIN
-    textured = road.roughness >= ROUGH_MIN
+    textured = road.textured
     smooth = (rough < SMOOTH_SHARE * road.roughness) if textured else np.zeros(len(rows), bool)
     smoother = (rough < SMOOTHER_SHARE * road.roughness) if textured else np.ones(len(rows), bool)
     # brighter than the road *and* smoother (a white or silver body; sunlit concrete keeps its texture), or darker than
