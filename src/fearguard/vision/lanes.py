@@ -43,7 +43,10 @@ RIDGE_MIN = 14  # [grey levels] a marking must be this much brighter than the ro
 RIDGE_RATIO = 0.15  # [-] ... and by this share of the road's own lightness (a ratio: the same in sun and shade)
 YELLOW_HUE = (14, 40)  # [OpenCV hue 0..180] yellow paint
 YELLOW_SAT_MIN = 70  # [0..255] saturation of yellow paint
-YELLOW_LIGHT_MIN = 70  # [0..255] lightness of yellow paint
+YELLOW_LIGHT_MIN = 70  # [0..255] lightness of yellow paint ... or, darker, saturation × lightness ≥ SAT_MIN × LIGHT_MIN: below
+#   L = 128 that product is the chroma (max − min of B, G, R: 2·S·L/255 ≥ 38 grey levels), so a yellow line in the dark,
+#   as strongly coloured as paint at the lightness floor, is still paint (MetaDrive by night: L 55, S 255, chroma 110;
+#   the asphalt beside it chroma ~9), while a dark pixel whose hue is noise (chroma of a few levels) is not
 SLOPE_MIN = 0.35  # [-] |dv/du| below this a segment is too flat to be a lane boundary
 HOUGH_THRESHOLD = 10  # [votes]
 HOUGH_MIN_LENGTH = 0.03  # [-] of the width
@@ -196,13 +199,15 @@ def marking_features(
     background = cv2.subtract(light, ridge_l)  # the opening: the road's lightness under the marking (≤ light: exact)
     bright = cv2.bitwise_and(cv2.compare(ridge_l, cv2.LUT(background, _BRIGHT_MIN), cv2.CMP_GE), mask)
     yellow = cv2.inRange(hls, (YELLOW_HUE[0], 0, YELLOW_SAT_MIN), (YELLOW_HUE[1], 255, 255))
-    yellow &= cv2.compare(light, YELLOW_LIGHT_MIN, cv2.CMP_GE) & mask
+    strong = cv2.compare(cv2.multiply(hls[:, :, 2], light, dtype=cv2.CV_16U), _YELLOW_CHROMA, cv2.CMP_GE)
+    yellow &= strong & mask
     rows = np.flatnonzero(cv2.reduce(yellow, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S))  # the saturation ridge matters only on these rows
     if len(rows):
         yellow &= cv2.compare(_ridges(hls[:, :, 2], region, rows), RIDGE_MIN, cv2.CMP_GE)
     return bright | yellow
 
 
+_YELLOW_CHROMA = YELLOW_SAT_MIN * YELLOW_LIGHT_MIN  # saturation × lightness of yellow paint at the least (YELLOW_LIGHT_MIN)
 # the least ridge that is bright over each background lightness b: ≥ RIDGE_MIN and ≥ RIDGE_RATIO·b (as float, rounded up)
 _BRIGHT_MIN = np.maximum(RIDGE_MIN, np.ceil(RIDGE_RATIO * np.arange(256))).astype(np.uint8)
 
