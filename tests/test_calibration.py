@@ -280,7 +280,7 @@ def test_cli_calibrate_folder_prints_each_image_and_writes_camera_toml(
         (folder / name).symlink_to(camera_cal / name)  # a folder argument, without copying the shared data
     out = tmp_path / "camera.toml"
     code = main(["calibrate", str(folder), "--pattern", "9x6", "--square-m", "0.025", "--mount-height-m", "0.15",
-                 "--pitch-deg", "10", "--out", str(out)])
+                 "--pitch-deg", "10", "--front-offset-m", "0.08", "--out", str(out)])
     text = capsys.readouterr().out
     assert code == 0
     lines = text.splitlines()
@@ -290,7 +290,7 @@ def test_cli_calibrate_folder_prints_each_image_and_writes_camera_toml(
     assert "board found in 5 of 6 images; RMS reprojection error" in text
     assert f"wrote {out}" in text
     cam = load_camera(out)
-    assert (cam.width_px, cam.height_px, cam.mount_height_m, cam.pitch_deg) == (1280, 720, 0.15, 10.0)
+    assert (cam.width_px, cam.height_px, cam.mount_height_m, cam.pitch_deg, cam.front_offset_m) == (1280, 720, 0.15, 10.0, 0.08)
     assert cam.rms_px is not None and cam.rms_px <= 1.0
 
 

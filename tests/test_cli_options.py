@@ -35,6 +35,7 @@ PARSE_TIME = [  # argparse rejects these: usage error, exit 2, "argument --NAME:
     (["rules", "explain", "--cues", "lane_confidence=1", "--lead-bearing", "95"], "--lead-bearing", "must be < 90"),
     (["calibrate", "x.jpg", "--square-m", "0"], "--square-m", "must be > 0"),
     (["calibrate", "x.jpg", "--mount-height-m", "-0.1"], "--mount-height-m", "must be > 0"),
+    (["calibrate", "x.jpg", "--front-offset-m", "-0.1"], "--front-offset-m", "must be >= 0"),
     (["calibrate", "x.jpg", "--pitch-deg", "90"], "--pitch-deg", "must be < 90"),
     (["duckietown", "--seconds", "0"], "--seconds", "must be > 0"),
     (["duckietown", "--cruise-mps", "-0.2"], "--cruise-mps", "must be > 0"),

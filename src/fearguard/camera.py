@@ -1,7 +1,8 @@
 """Pinhole camera model: intrinsics, lens distortion and how the camera is mounted on the car.
 
 Image axes: u to the right, v down (pixels). Vehicle axes: x forward, y left, z up (metres).
-The camera sits ``mount_height_m`` above a flat ground, looking forward, pitched down by ``pitch_deg``.
+The camera sits ``mount_height_m`` above a flat ground, looking forward, pitched down by ``pitch_deg``, and
+``front_offset_m`` behind the vehicle's front: ranges to what stands ahead are given from the front.
 Used for undistortion, bearings of things in the image, and range to a point on the ground
 (D = H / tan(pitch + arctan((v − cy) / fy)), the model-car paper's formula).
 """
@@ -37,6 +38,8 @@ class CameraModel:
     mount_height_m: float | None = None  # None: unknown, so no ground-plane ranges
     pitch_deg: float = 0.0  # positive = looking down
     rms_px: float | None = None  # calibration's reprojection error, when calibrated
+    front_offset_m: float = 0.0  # the lens's distance behind the vehicle's front (bumper), along the car: what is ahead
+    #   is reported from the front, where a collision happens and a range sensor measures (a windscreen camera: ~2 m)
 
     def __post_init__(self) -> None:
         if self.width_px <= 0 or self.height_px <= 0:
@@ -48,6 +51,8 @@ class CameraModel:
             raise ValueError(f"CameraModel focal lengths must be > 0, got fx={self.fx_px}, fy={self.fy_px}")
         if self.mount_height_m is not None and not (math.isfinite(self.mount_height_m) and self.mount_height_m > 0):
             raise ValueError(f"CameraModel.mount_height_m must be > 0 or None, got {self.mount_height_m!r}")
+        if not (math.isfinite(self.front_offset_m) and self.front_offset_m >= 0.0):
+            raise ValueError(f"CameraModel.front_offset_m must be finite and >= 0, got {self.front_offset_m!r}")
         if not all(math.isfinite(k) for k in self.distortion):
             raise ValueError(f"CameraModel.distortion must be finite, got {self.distortion!r}")
 
@@ -91,6 +96,12 @@ class CameraModel:
         if angle <= 1e-6:
             return None
         return self.mount_height_m / math.tan(angle)
+
+    def range_ahead_m(self, v_px: float) -> float | None:
+        """Distance from the vehicle's front to the ground point seen at image row v: the ground range less
+        ``front_offset_m``, never below 0 (None as ``ground_range_m``). The range of an object standing on that row."""
+        ground = self.ground_range_m(v_px)
+        return None if ground is None else max(0.0, ground - self.front_offset_m)
 
     def project_ground(self, x_fwd_m: np.ndarray, y_left_m: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Image (u, v) of ground points in vehicle axes, and a mask of those in front of the camera."""

@@ -124,6 +124,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
     """Chessboard photos → camera.toml: found/missed per image, the RMS reprojection error, the intrinsics."""
+    from dataclasses import replace
+
     from fearguard.camera import save_camera
     from fearguard.vision.calibration import CalibrationError, calibrate_chessboard, expand_image_paths, parse_pattern
 
@@ -139,7 +141,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
         print(f"{path.name:<{width}}  {lines[path]}")
     for note in result.notes:
         print(f"note: {note}")
-    cam = result.camera
+    cam = replace(result.camera, front_offset_m=args.front_offset_m)
     print(f"board found in {len(result.found)} of {len(lines)} images; RMS reprojection error {result.rms_px:.3f} px")
     dist = " ".join(f"{k} {v:+.4f}" for k, v in zip(("k1", "k2", "p1", "p2", "k3"), cam.distortion, strict=False))
     print(f"camera {cam.width_px}x{cam.height_px}: fx {cam.fx_px:.1f} fy {cam.fy_px:.1f} cx {cam.cx_px:.1f} cy {cam.cy_px:.1f} px; {dist}")
@@ -884,6 +886,8 @@ def build_parser() -> argparse.ArgumentParser:
                            help="camera height above the ground (m), for ground ranges")
     calibrate.add_argument("--pitch-deg", type=_number(above=-90.0, below=90.0), default=0.0,
                            help="camera pitch, positive = looking down (deg)")
+    calibrate.add_argument("--front-offset-m", type=_number(0.0), default=0.0,
+                           help="the lens's distance behind the car's front bumper (m): ranges are given from the front")
     calibrate.add_argument("--out", default=None, help="camera file to write (TOML), e.g. camera.toml "
                            "(default: camera.toml in a new folder fearguard-out/calibrate-...-TIMESTAMP)")
     calibrate.set_defaults(func=cmd_calibrate)

@@ -288,8 +288,9 @@ SEARCH_DEPTH_MAX_M = 50.0  # [m] the object search vouches for no more than this
 
 
 def search_depth_m(camera: CameraModel, region: RoadRegion, scale: float) -> float:
-    """How far ahead the object search looked: the flat-ground range of the road region's top row, capped."""
-    far = camera.ground_range_m(region.top_v_px * scale)
+    """How far ahead of the car's front the object search looked: the flat-ground range of the road region's top row,
+    capped."""
+    far = camera.range_ahead_m(region.top_v_px * scale)
     return min(far, SEARCH_DEPTH_MAX_M) if far is not None and math.isfinite(far) and far > 0 else SEARCH_DEPTH_MAX_M
 
 

@@ -41,8 +41,9 @@ GATE_CHI2 = 16.3  # [-] chi-square, 3 dof, p = 0.001
 
 
 def lead_from_box(box: LeadBox, camera: CameraModel) -> Lead:
-    """Bearing of the box centre and ground-plane range of its bottom edge (None without mounting height)."""
-    return Lead(camera.bearing_deg(box.x_px + 0.5 * box.w_px), camera.ground_range_m(box.y_px + box.h_px))
+    """Bearing of the box centre and ground-plane range of its bottom edge from the car's front (None without mounting
+    height)."""
+    return Lead(camera.bearing_deg(box.x_px + 0.5 * box.w_px), camera.range_ahead_m(box.y_px + box.h_px))
 
 
 def detect_lead(

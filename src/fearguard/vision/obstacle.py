@@ -6,7 +6,8 @@ in it) a pixel is *foreign* when its 3-row patch (``occlusion.SurfaceMaps``) doe
 is not inside the lane), darker than any shadow, brighter and smoother, or smooth where the road is rough. A row whose
 foreign pixels cover ``MIN_SHARE`` of the interior width is an object row; the nearest stretch of ``MIN_ROWS`` such rows
 is the object, standing on its lowest row. Its range is the flat-ground range of that row,
-D = H / tan(α + arctan((v − v0) / f_y)) (``CameraModel.ground_range_m``), so it needs the camera's mounting height.
+D = H / tan(α + arctan((v − v0) / f_y)) (``CameraModel.ground_range_m``), so it needs the camera's mounting height;
+it is given from the car's front (``CameraModel.range_ahead_m``).
 In the bending lane model's interior, a candidate that enters from the interior's edge and goes on past it is the lane's
 edge (tape or verge let in where the edge line went unseen), not an object: ``_edge_runs``.
 """
@@ -139,7 +140,7 @@ def search_lane(
                 break
             band = maps.grey[band_top : bottom + 1, c0:c1][foreign[band_top : bottom + 1]]
             if line_m is None and band.size and float(band.mean()) > road.grey:  # paint is brighter than the road; a shadow is not
-                line_m = camera.ground_range_m((rows[bottom] + 1.0) * scale)
+                line_m = camera.range_ahead_m((rows[bottom] + 1.0) * scale)
             hit[band_top : bottom + 1] = False
             bottom = _lowest_stretch_end(hit, MIN_ROWS)
         if bottom is None:
@@ -153,7 +154,7 @@ def search_lane(
     u = c0 + np.flatnonzero(foreign[bottom - MIN_ROWS + 1 : bottom + 1].any(axis=0))
     v_frame = (rows[bottom] + 1.0) * scale  # the object stands on the lower edge of its lowest row
     u_left, u_right = u.min() * scale, (u.max() + 1.0) * scale
-    range_m = camera.ground_range_m(v_frame)
+    range_m = camera.range_ahead_m(v_frame)
     return LaneSearch(Obstacle(float(u_left), float(u_right), float(v_frame), camera.bearing_deg(0.5 * (u_left + u_right)),
                                range_m if range_m is not None and math.isfinite(range_m) else None), line_m)
 

@@ -52,6 +52,7 @@ WHEELBASE_M = FRONT_AXLE_M + REAR_AXLE_M  # [m] 2.469
 REAR_AXLE_TO_CAMERA_M = REAR_AXLE_M + CAMERA_AHEAD_OF_CENTRE_M  # [m]
 CAR_LENGTH_M = 4.515  # [m] DefaultVehicle.DEFAULT_LENGTH
 CAR_WIDTH_M = 1.852  # [m] DefaultVehicle.DEFAULT_WIDTH
+CAMERA_BEHIND_FRONT_M = CAR_LENGTH_M / 2.0 - CAMERA_AHEAD_OF_CENTRE_M  # [m] 1.46: the camera's ranges less this are the gap
 MAX_SPEED_MPS = 80.0 / 3.6  # [m/s] max_speed_km_h: the engine gives no force above it
 
 # -- actuation -----------------------------------------------------------------------------------------------
@@ -69,9 +70,11 @@ RADAR_MAX_RANGE_M = 80.0  # [m] likewise: beyond it nothing is in range
 
 
 def metadrive_camera(width_px: int = DEFAULT_FRAME_PX[0], height_px: int = DEFAULT_FRAME_PX[1]) -> CameraModel:
-    """MetaDrive's RGB camera at a resolution: 60° horizontal field of view, square pixels, centred, 2.095 m up."""
+    """MetaDrive's RGB camera at a resolution: 60° horizontal field of view, square pixels, centred, 2.095 m up, 1.46 m
+    behind the front bumper (its ranges are gaps, as the simulator's truth measures them)."""
     f = (width_px / 2.0) / math.tan(math.radians(CAMERA_HFOV_DEG) / 2.0)
-    return CameraModel(width_px, height_px, f, f, width_px / 2.0, height_px / 2.0, (), CAMERA_HEIGHT_M, CAMERA_PITCH_DEG)
+    return CameraModel(width_px, height_px, f, f, width_px / 2.0, height_px / 2.0, (), CAMERA_HEIGHT_M, CAMERA_PITCH_DEG,
+                       front_offset_m=CAMERA_BEHIND_FRONT_M)
 
 
 def steering_wheelbase_m(aim_m: float = AIM_M) -> float:
