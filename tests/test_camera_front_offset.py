@@ -60,3 +60,16 @@ def test_metadrive_camera_is_behind_the_bumper_by_half_the_car_less_its_mount() 
     assert CAMERA_BEHIND_FRONT_M == pytest.approx(CAR_LENGTH_M / 2.0 - 0.8)
     assert metadrive_camera().front_offset_m == CAMERA_BEHIND_FRONT_M
     assert metadrive_camera().scaled_to(640, 480).front_offset_m == CAMERA_BEHIND_FRONT_M
+
+
+@pytest.mark.parametrize(("name", "offset_m"), [("stationary_obstacle", 0.08), ("ccrm_road", 2.1)])
+def test_the_simulators_camera_knows_how_far_behind_the_bumper_it_sits(name: str, offset_m: float) -> None:
+    """fearguard's own simulator: length − rear overhang − the camera's place ahead of the rear axle."""
+    from fearguard.sim.scenario import load_scenario
+    from fearguard.sim.world import World
+
+    sc = load_scenario(Path(__file__).resolve().parents[1] / "scenarios" / f"{name}.toml")
+    v = sc.vehicle
+    world = World(sc)
+    assert world.camera.front_offset_m == pytest.approx(v.length_m - v.rear_overhang_m - sc.camera.forward_m)
+    assert world.camera.front_offset_m == pytest.approx(offset_m, abs=0.01)

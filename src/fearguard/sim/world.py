@@ -14,7 +14,7 @@ byte-identical frames and truth whatever else runs. After a collision the ego ca
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -76,9 +76,10 @@ class World:
         rngs = [np.random.default_rng(child) for child in np.random.SeedSequence(self.seed).spawn(len(SUBSYSTEMS))]
         scenery_rng, noise_rng, self._ultrasonic_rng, self._odometer_rng, self._speed_rng = rngs
         self.road = Road(scenario.road)
-        self.camera: CameraModel = scenario.camera.model()
+        v = scenario.vehicle  # the camera sits forward_m ahead of the rear axle, the front bumper length − overhang ahead
+        self.camera: CameraModel = replace(
+            scenario.camera.model(), front_offset_m=max(0.0, v.length_m - v.rear_overhang_m - scenario.camera.forward_m))
         self.dt_s = scenario.dt_s
-        v = scenario.vehicle
         self._limits = BicycleLimits(v.wheelbase_m, v.max_accel_mps2, v.max_brake_mps2, v.max_steering_deg, v.max_steering_rate_dps)
         ego = scenario.ego
         x, y = self.road.point_at(ego.start_s_m, ego.lateral_m)
