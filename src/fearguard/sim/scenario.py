@@ -129,7 +129,7 @@ def _build(top: Table, path: Path) -> Scenario:
         raise top.fail("road", "missing [road] table; add [road] and at least one [[road.segments]] (kind = \"straight\", length_m = ...)")
     road = _road(top.table("road", _ROAD_KEYS), d["road"])
     ego = _ego(top.table("ego", ("start_s_m", "lateral_m", "heading_deg", "speed_mps")), vehicle)
-    ego_front_s = ego.start_s_m + vehicle.length_m - vehicle.rear_overhang_m
+    ego_front_s = ego.start_s_m + vehicle.front_m
     return Scenario(
         path=path,
         name=top.string("name", path.stem),

@@ -83,6 +83,11 @@ class VehicleProfile:
         """Rear bumper behind the rear axle (overhangs are taken equal front and back)."""
         return (self.length_m - self.wheelbase_m) / 2.0
 
+    @property
+    def front_m(self) -> float:
+        """Front bumper ahead of the rear axle."""
+        return self.length_m - self.rear_overhang_m
+
 
 @dataclass(frozen=True)
 class EgoStart:

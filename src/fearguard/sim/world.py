@@ -76,9 +76,8 @@ class World:
         rngs = [np.random.default_rng(child) for child in np.random.SeedSequence(self.seed).spawn(len(SUBSYSTEMS))]
         scenery_rng, noise_rng, self._ultrasonic_rng, self._odometer_rng, self._speed_rng = rngs
         self.road = Road(scenario.road)
-        v = scenario.vehicle  # the camera sits forward_m ahead of the rear axle, the front bumper length − overhang ahead
-        self.camera: CameraModel = replace(
-            scenario.camera.model(), front_offset_m=max(0.0, v.length_m - v.rear_overhang_m - scenario.camera.forward_m))
+        v = scenario.vehicle  # the camera sits forward_m ahead of the rear axle, the front bumper v.front_m
+        self.camera: CameraModel = replace(scenario.camera.model(), front_offset_m=max(0.0, v.front_m - scenario.camera.forward_m))
         self.dt_s = scenario.dt_s
         self._limits = BicycleLimits(v.wheelbase_m, v.max_accel_mps2, v.max_brake_mps2, v.max_steering_deg, v.max_steering_rate_dps)
         ego = scenario.ego
@@ -167,11 +166,11 @@ class World:
     def ego_corners(self) -> np.ndarray:
         """The ego car's footprint corners (4, 2) in world x, y."""
         v, e = self.scenario.vehicle, self._ego
-        return footprint(e.x_m, e.y_m, e.yaw_rad, -v.rear_overhang_m, v.length_m - v.rear_overhang_m, v.width_m)
+        return footprint(e.x_m, e.y_m, e.yaw_rad, -v.rear_overhang_m, v.front_m, v.width_m)
 
     def _front_m(self) -> tuple[float, float]:
         v, e = self.scenario.vehicle, self._ego
-        d = v.length_m - v.rear_overhang_m
+        d = v.front_m
         return e.x_m + d * math.cos(e.yaw_rad), e.y_m + d * math.sin(e.yaw_rad)
 
     def camera_pose(self) -> tuple[float, float, float]:

@@ -199,11 +199,11 @@ def marking_features(
     background = cv2.subtract(light, ridge_l)  # the opening: the road's lightness under the marking (≤ light: exact)
     bright = cv2.bitwise_and(cv2.compare(ridge_l, cv2.LUT(background, _BRIGHT_MIN), cv2.CMP_GE), mask)
     yellow = cv2.inRange(hls, (YELLOW_HUE[0], 0, YELLOW_SAT_MIN), (YELLOW_HUE[1], 255, 255))
-    strong = cv2.compare(cv2.multiply(hls[:, :, 2], light, dtype=cv2.CV_16U), _YELLOW_CHROMA, cv2.CMP_GE)
-    yellow &= strong & mask
+    sat = cv2.extractChannel(hls, 2)  # once, contiguous: the chroma test and the saturation ridge both read it
+    yellow &= cv2.compare(cv2.multiply(sat, light, dtype=cv2.CV_16U), _YELLOW_CHROMA, cv2.CMP_GE) & mask
     rows = np.flatnonzero(cv2.reduce(yellow, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S))  # the saturation ridge matters only on these rows
     if len(rows):
-        yellow &= cv2.compare(_ridges(hls[:, :, 2], region, rows), RIDGE_MIN, cv2.CMP_GE)
+        yellow &= cv2.compare(_ridges(sat, region, rows), RIDGE_MIN, cv2.CMP_GE)
     return bright | yellow
 
 

@@ -224,7 +224,7 @@ def test_a_duck_on_a_town_crossing_is_stopped_for_and_the_robot_goes_on(tmp_path
         tile = w.env._get_tile(*w.env.get_grid_coords(np.array([x, 0.0, z])))
     finally:
         w.close()
-    assert tile is not None and "way" in tile["kind"], tile  # 3way_left / 3way_right / 4way: the duck is on the crossing
+    assert tile is not None and "way" in tile["kind"], tile  # an intersection tile (3way_left, 3way_right here): the crossing
     ob = s["obstacle"]
     assert not ob["contact"] and ob["stopped_before_contact"] and ob["went_on"]
     assert ob["min_gap_m"] >= 0.15
