@@ -26,10 +26,21 @@ import numpy as np
 
 from fearguard.camera import CameraModel
 from fearguard.observation import Lead, LeadBox
+from fearguard.vision.bend import Bend, trace_bend
 from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
 from fearguard.vision.exposure import Exposure, road_exposure
 from fearguard.vision.ground_lanes import GroundLanes, GroundLaneSpec, aim_point, ground_lanes_in_image
-from fearguard.vision.lanes import LaneLine, RoadRegion, assumed_horizon_v_px, detect_lanes, region_mask, road_region, work_size
+from fearguard.vision.lanes import (
+    PITCHED_DEG,
+    LaneLine,
+    RoadRegion,
+    assumed_horizon_v_px,
+    detect_lanes,
+    lane_width_rows,
+    region_mask,
+    road_region,
+    work_size,
+)
 from fearguard.vision.lead import detect_lead, lead_from_box
 from fearguard.vision.obstacle import Obstacle, search_lane
 from fearguard.vision.occlusion import default_lines, occlusion, road_appearance, road_reference, surface_maps
@@ -187,6 +198,7 @@ class Lanes:
     interior: np.ndarray | None = None  # ... the lane between them, over the road rows (the road model's, the object search's)
     hls_white: np.ndarray | None = None  # the road rows' HLS under white light, when the ground model measured a tinted one
     white: np.ndarray | None = None  # ... its white (edge-line) paint over the road rows (the object search's)
+    bend: Bend | None = None  # the boundaries traced round a bend (vision/bend.py): the aim point lies on them
 
 
 @dataclass(frozen=True)
@@ -242,13 +254,24 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
         left = tracked.left  # coasting track of a boundary missed this frame (keeps the aim point steady)
     if right is None and tracked.right is not None and left is not None:
         right = tracked.right
+    rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
+    bend = None
+    if p.camera.pitch_deg < PITCHED_DEG:  # a road camera: a model car's low, steep view of a tight track is not traced
+        bend = trace_bend(det.maps, region, left, right, lane_width_rows(rows, (left, right), region), _horizon_v_px(p))
     return Lanes(
         left=left, right=right,
         seen_left=det.left if tracked.left_accepted else None, seen_right=det.right if tracked.right_accepted else None,
         agreement_left=agreement(det.left, tracked.predicted_left, region, width_px),
         agreement_right=agreement(det.right, tracked.predicted_right, region, width_px),
-        features=det.features, paint_integral=det.maps.paint_integral, aim_row_px=v_aim, lane_width_px=width_px,
+        features=det.features, paint_integral=det.maps.paint_integral, aim_row_px=v_aim, lane_width_px=width_px, bend=bend,
+        curves_px=_bend_polylines(bend, rows) if bend is not None else None,
     )
+
+
+def _bend_polylines(bend: Bend, rows: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """Each traced boundary as an image polyline (n, 2: u, v) in working pixels over the rows its ridges span."""
+    v = rows[(rows >= bend.rows[0]) & (rows <= bend.rows[1])].astype(np.float64)
+    return tuple(None if side is None else np.column_stack([bend.u_at(side, v), v]) for side in (bend.left, bend.right))
 
 
 def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: float, given: LeadBox | None) -> LeadAndOcclusion:
@@ -317,6 +340,8 @@ def steer(p: Prepared, lanes: Lanes, trackers: Trackers, ground: GroundLaneSpec 
         limit = ground.max_bearing_deg
         return trackers.memory.hold(max(-limit, min(limit, math.degrees(math.atan2(aim[1], aim[0])))))
     u_aim = aim_point_u(lanes.left, lanes.right, lanes.aim_row_px, lanes.lane_width_px)
+    if lanes.bend is not None and u_aim is not None:
+        u_aim = bent_aim_u(lanes.bend, lanes.aim_row_px, lanes.lane_width_px)
     return trackers.memory.hold(steering_from_aim(u_aim, p.scale, p.camera) if u_aim is not None else None)
 
 
@@ -355,6 +380,23 @@ def _analyze(
         t_s=t_s,
         horizon_v_px=assumed_horizon_v_px(p.bgr.shape[1], p.bgr.shape[0], p.camera),
     )
+
+
+def _horizon_v_px(p: Prepared) -> float:
+    """The horizon row in working pixels: the mounted camera's own (it knows its pitch, 0 included), else where the
+    road region assumes it (``lanes.assumed_horizon_v_px``: a dash-cam's default)."""
+    if p.camera.mount_height_m is not None:
+        return p.camera.horizon_v_px() / p.scale
+    return assumed_horizon_v_px(p.region.width_px, p.region.height_px, p.camera)
+
+
+def bent_aim_u(bend: Bend, v_px: float, lane_width_px: float) -> float:
+    """The lane centre at row v on the traced curves: between both, or half a lane width from one."""
+    left = bend.u_at(bend.left, v_px) if bend.left is not None else None
+    right = bend.u_at(bend.right, v_px) if bend.right is not None else None
+    if left is not None and right is not None:
+        return float(0.5 * (left + right))
+    return float(left + 0.5 * lane_width_px if left is not None else right - 0.5 * lane_width_px)
 
 
 @lru_cache(maxsize=8)
