@@ -50,6 +50,7 @@ from fearguard.policy import (
 )
 from fearguard.policy.decision import (
     EmergencyChoice,
+    doubt_step,
     emergency_step,
     envelope_step,
     fear_range_m,
@@ -329,6 +330,9 @@ class FearGuard:
             st.recovery = Recovery()  # a new EMERGENCY starts with the full re-acquisition budget
             if road_calm:
                 st.trusted_steering_deg = wanted  # the road picture is calm: remember its steering (held if it is lost)
+            elif not choice.caution:
+                wanted, why = doubt_step(result.cause_fears[Cause.ROAD], wanted, st.trusted_steering_deg, cfg)
+                reasons.extend([why] if why else [])
         out_steering = self._steer_out(wanted, dt, reasons)
         lateral = lateral_speed_mps(max(abs(steering), abs(out_steering)), v)
         caps.append(lateral)

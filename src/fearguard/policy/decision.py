@@ -5,6 +5,7 @@ here is a pure function of what it is handed, so each can be tested, and read, o
 
     envelope_step   the stopping envelope for the obstacle range (RSS), and the distance it plans with
     lane_step       the lane check's verdict → the steering wanted, a cap, CAUTION, and whether the estimator is distrusted
+    doubt_step      a road picture not trusted, no EMERGENCY yet → the steering last given on a calm picture, held
     emergency_step  an EMERGENCY plan → the strategy, its cap, the steering (a creep steers by the lane seen now)
     motion_reasons  why the obstacle binds: an imminent collision, or a proper response inside the safe distance
     limit_reason    which cap set the speed limit
@@ -84,6 +85,18 @@ def lane_step(check: LaneCheck | None, distrusted: bool, steering_deg: float, la
         why = f"lane check: the estimator steered out of the lane when last checked: {source} {wanted:+.1f} deg"
         return SteeringChoice(wanted, True, cap, why, True)
     return SteeringChoice(steering_deg, False, math.inf, "", distrusted and check is None)
+
+
+def doubt_step(road_fear: float, wanted_deg: float, trusted_deg: float, cfg: PolicyConfig) -> tuple[float, str]:
+    """While the road picture is not trusted (its fear at or over the emergency threshold) before an EMERGENCY answers
+    it — a flicker's grace, the frames the mode machine counts — the steering last given on a calm picture is held:
+    the estimator reads the very picture in doubt (MetaDrive, a tight bend: the lane lost for 0.3 s, the lane
+    steering's angle fell from 17 to 3 deg and the car left its lane), and the EMERGENCY that may follow holds that
+    angle too. A calm picture steers as wanted."""
+    if road_fear < cfg.emergency_enter_fear or wanted_deg == trusted_deg:
+        return wanted_deg, ""
+    return trusted_deg, (f"road picture not trusted (fear {road_fear:.2f}): holding the steering of the last calm picture "
+                         f"{trusted_deg:+.1f} deg (the estimator's {wanted_deg:+.1f} deg read the picture in doubt)")
 
 
 @dataclass(frozen=True)
