@@ -40,9 +40,16 @@ def _boundary(radius_m: float, offset_m: float, s: np.ndarray) -> tuple[np.ndarr
     return (radius_m - offset_m) * np.sin(heading), radius_m - (radius_m - offset_m) * np.cos(heading)
 
 
+def _yawed(x: np.ndarray, y: np.ndarray, yaw_deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """Ground points as seen from a car turned ``yaw_deg`` to the left of the lane's starting direction."""
+    c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
+    return c * x + s * y, -s * x + c * y
+
+
 def curved_lane(cam: CameraModel, radius_m: float, lane_m: float, paint: tuple[int, int, int], grey: int, dashed_right: bool,
-                seed: int, car_left_m: float = 0.0) -> np.ndarray:
-    """The picture: sky, asphalt, both boundaries 4 % of the lane wide (the right one dashed: 1 lane long, 2 apart)."""
+                seed: int, car_left_m: float = 0.0, yaw_deg: float = 0.0) -> np.ndarray:
+    """The picture: sky, asphalt, both boundaries 4 % of the lane wide (the right one dashed: 1 lane long, 2 apart); the
+    car ``yaw_deg`` off the lane's direction (+ left)."""
     img = np.zeros((H, W, 3), np.uint8)
     img[:] = (200, 170, 140)
     img[int(max(0, min(H, math.ceil(cam.horizon_v_px())))) :] = (grey, grey + 3, grey + 2)
@@ -50,7 +57,7 @@ def curved_lane(cam: CameraModel, radius_m: float, lane_m: float, paint: tuple[i
     s = np.linspace(0.5, 80.0, 600)
     for side in (0.5, -0.5):
         offset = side * lane_m - car_left_m
-        (xa, ya), (xb, yb) = _boundary(radius_m, offset - paint_m / 2, s), _boundary(radius_m, offset + paint_m / 2, s)
+        (xa, ya), (xb, yb) = (_yawed(*_boundary(radius_m, offset + d, s), yaw_deg) for d in (-paint_m / 2, paint_m / 2))
         (ua, va, fa), (ub, vb, fb) = cam.project_ground(xa, ya), cam.project_ground(xb, yb)
         quads = np.stack([np.column_stack(c) for c in ((ua[:-1], va[:-1]), (ua[1:], va[1:]), (ub[1:], vb[1:]), (ub[:-1], vb[:-1]))], axis=1)
         keep = fa[:-1] & fa[1:] & fb[:-1] & fb[1:] & (np.abs(quads).max(axis=(1, 2)) < 1e5)
@@ -61,9 +68,9 @@ def curved_lane(cam: CameraModel, radius_m: float, lane_m: float, paint: tuple[i
     return np.clip(img + noise, 0, 255).astype(np.uint8)
 
 
-def true_bearing_deg(cam: CameraModel, radius_m: float, v_px: float, car_left_m: float) -> float:
+def true_bearing_deg(cam: CameraModel, radius_m: float, v_px: float, car_left_m: float, yaw_deg: float = 0.0) -> float:
     """Bearing of the lane centre where it crosses image row v (before the curve turns back toward the camera)."""
-    x, y = _boundary(radius_m, -car_left_m, np.linspace(0.5, 200.0, 20000))
+    x, y = _yawed(*_boundary(radius_m, -car_left_m, np.linspace(0.5, 200.0, 20000)), yaw_deg)
     u, v, front = cam.project_ground(x, y)
     receding = front & (np.diff(np.concatenate([[np.inf], v])) < 0)
     i = int(np.argmin(np.abs(v[receding] - v_px)))

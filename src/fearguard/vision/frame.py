@@ -36,8 +36,10 @@ from fearguard.vision.lanes import (
     RoadRegion,
     assumed_horizon_v_px,
     detect_lanes,
+    far_shift_px,
     lane_width_rows,
     region_mask,
+    region_toward,
     road_region,
     work_size,
 )
@@ -244,7 +246,9 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
                          agreement_right=fit.agreement[1], features=fit.features, paint_integral=fit.paint_integral, aim_row_px=v_aim,
                          lane_width_px=width_px, ground=fit.lanes, out_of_view=fit.out_of_view, expected=fit.expected,
                          curves_px=fit.curves_px, interior=fit.interior, hls_white=fit.hls_white, white=fit.white)
-    det = detect_lanes(p.hls, region, p.mask, trackers.lanes.current(region))
+    shift = far_shift_px(trackers.memory.far_centre_u_px, region)
+    mask = region_toward(region, shift) if shift else p.mask  # the far edge where last frame's lane went
+    det = detect_lanes(p.hls, region, mask, trackers.lanes.current(region))
     v_aim = lookahead_row(region)
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
     tracked = trackers.lanes.update(t_s, region, det.left, det.right)
@@ -255,9 +259,14 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
     if right is None and tracked.right is not None and left is not None:
         right = tracked.right
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
-    bend = None
+    bend, far = None, None
     if p.camera.pitch_deg < PITCHED_DEG:  # a road camera: a model car's low, steep view of a tight track is not traced
-        bend = trace_bend(det.maps, region, left, right, lane_width_rows(rows, (left, right), region), _horizon_v_px(p))
+        widths = lane_width_rows(rows, (left, right), region)  # (and its region spans the picture's width over most rows)
+        bend = trace_bend(det.maps, region, left, right, widths, _horizon_v_px(p))
+        far = aim_point_u(left, right, rows[0], widths[0])
+        if bend is not None and far is not None:
+            far = bent_aim_u(bend, rows[0], widths[0])
+    trackers.memory.remember_far_centre(far)  # where the next frame's road region looks
     return Lanes(
         left=left, right=right,
         seen_left=det.left if tracked.left_accepted else None, seen_right=det.right if tracked.right_accepted else None,

@@ -65,6 +65,7 @@ LANE_WIDTH_RANGE = (0.15, 1.6)  # [-] plausible lane width at the region's middl
 VP_ABOVE_TOP = 0.25  # [-] of the height: the lines may meet at most this far above the region top ...
 VP_BELOW_TOP = 0.04  # [-] ... and at most this far below it (lines crossing on the road are impossible)
 VP_U_RANGE = (0.1, 0.9)  # [-] of the width: where the vanishing point may lie horizontally
+FAR_SHIFT_MAX = 0.3  # [-] of the width: the road region's far edge follows the lane at most this far sideways
 RAMP = 0.1  # [-] of the image size: plausibility falls from 1 to 0 over this distance outside a range
 
 
@@ -177,10 +178,33 @@ def road_region(width_px: int, height_px: int, camera: CameraModel | None = None
     )
 
 
-def region_mask(region: RoadRegion) -> np.ndarray:
-    """uint8 0/255 mask of the region's trapezoid."""
+def region_mask(region: RoadRegion, far_shift_px: int = 0) -> np.ndarray:
+    """uint8 0/255 mask of the region's trapezoid; ``far_shift_px``: its top edge moved that far sideways (+ right)."""
     mask = np.zeros((region.height_px, region.width_px), np.uint8)
-    cv2.fillConvexPoly(mask, np.array(region.polygon_px, np.int32), 255)
+    polygon = [(u + far_shift_px if v == region.top_v_px else u, v) for u, v in region.polygon_px]
+    cv2.fillConvexPoly(mask, np.array(polygon, np.int32), 255)
+    return mask
+
+
+def far_shift_px(lane_centre_top_u_px: float | None, region: RoadRegion) -> int:
+    """How far the road region's far edge moves sideways to lie on the lane: the lane centre at the region's top row
+    (last frame's) less the image centre, within ±FAR_SHIFT_MAX of the width; 0 without a lane."""
+    if lane_centre_top_u_px is None or not math.isfinite(lane_centre_top_u_px):
+        return 0
+    limit = FAR_SHIFT_MAX * region.width_px
+    return round(min(limit, max(-limit, lane_centre_top_u_px - 0.5 * region.width_px)))
+
+
+@lru_cache(maxsize=64)
+def region_toward(region: RoadRegion, far_shift_px: int) -> np.ndarray:
+    """The region's mask with its far edge moved ``far_shift_px`` sideways, onto the lane (read-only).
+
+    The trapezoid's top is centred for a straight lane ahead; round a tight bend, or with the car yawed in its lane,
+    the lane's far end lies to one side and its inner boundary leaves the centred trapezoid (MetaDrive, R 21 m at
+    10 m/s: the yellow centre line outside it from 12 m on, the left boundary fitted to whatever was left inside, the
+    car under-steered out of the bend). Centring the far edge where the lane was last frame keeps it in the search."""
+    mask = region_mask(region, far_shift_px)
+    mask.flags.writeable = False
     return mask
 
 

@@ -40,10 +40,12 @@ def steering_from_aim(u_work_px: float, scale: float, camera: CameraModel) -> fl
 
 @dataclass
 class LaneMemory:
-    """What the steering keeps between frames: the lane width at the look-ahead row and the last angle."""
+    """What the steering keeps between frames: the lane width at the look-ahead row, the last angle, and how far
+    where the lane centre crossed the road region's top row (where the next frame's region looks: ``lanes.region_toward``)."""
 
     lane_width_px: float | None = None
     last_steering_deg: float | None = None
+    far_centre_u_px: float | None = None
 
     def remember_width(self, left: LaneLine | None, right: LaneLine | None, v_px: float, width_px: int) -> float:
         if left is not None and right is not None:
@@ -58,3 +60,6 @@ class LaneMemory:
         steering = steering_deg if steering_deg is not None else self.last_steering_deg
         self.last_steering_deg = steering
         return steering
+
+    def remember_far_centre(self, u_px: float | None) -> None:
+        self.far_centre_u_px = u_px

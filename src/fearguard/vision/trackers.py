@@ -44,6 +44,10 @@ class SteeringMemory(Protocol):
 
     def hold(self, steering_deg: float | None) -> float | None: ...
 
+    far_centre_u_px: float | None  # [px] where last frame's lane centre crossed the road region's top row (None: no lane)
+
+    def remember_far_centre(self, u_px: float | None) -> None: ...
+
 
 class ObstacleTracking(Protocol):
     def update(self, seen: Obstacle | None) -> Obstacle | None: ...
@@ -109,6 +113,11 @@ class PassThroughMemory:
 
     def hold(self, steering_deg: float | None) -> float | None:
         return steering_deg
+
+    far_centre_u_px = None
+
+    def remember_far_centre(self, u_px: float | None) -> None:
+        pass
 
 
 class PassThroughConfidence:
