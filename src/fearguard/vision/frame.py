@@ -265,8 +265,6 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
         bend = trace_bend(det.maps, region, left, right, widths, _horizon_v_px(p))
         if p.camera.mount_height_m is not None:  # a mounted camera (on uncalibrated dash-cam footage it did not help:
             far = aim_point_u(left, right, rows[0], widths[0])  # docs/perception.md, "The road region follows the lane")
-            if bend is not None and far is not None:
-                far = bent_aim_u(bend, rows[0], widths[0])
     trackers.memory.remember_far_centre(far)  # where the next frame's road region looks
     return Lanes(
         left=left, right=right,

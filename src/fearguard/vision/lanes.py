@@ -187,8 +187,9 @@ def region_mask(region: RoadRegion, far_shift_px: int = 0) -> np.ndarray:
 
 
 def far_shift_px(lane_centre_top_u_px: float | None, region: RoadRegion) -> int:
-    """How far the road region's far edge moves sideways to lie on the lane: the lane centre at the region's top row
-    (last frame's) less the image centre, within ±FAR_SHIFT_MAX of the width; 0 without a lane."""
+    """How far the road region's far edge moves sideways to lie on the lane: the lane's centre at the region's top row
+    (last frame's, between its straight lines) less the image centre, within ±FAR_SHIFT_MAX of the width; 0 without a
+    lane."""
     if lane_centre_top_u_px is None or not math.isfinite(lane_centre_top_u_px):
         return 0
     limit = FAR_SHIFT_MAX * region.width_px
@@ -200,9 +201,12 @@ def region_toward(region: RoadRegion, far_shift_px: int) -> np.ndarray:
     """The region's mask with its far edge moved ``far_shift_px`` sideways, onto the lane (read-only).
 
     The trapezoid's top is centred for a straight lane ahead; round a tight bend, or with the car yawed in its lane,
-    the lane's far end lies to one side and its inner boundary leaves the centred trapezoid (MetaDrive, R 21 m at
-    10 m/s: the yellow centre line outside it from 12 m on, the left boundary fitted to whatever was left inside, the
-    car under-steered out of the bend). Centring the far edge where the lane was last frame keeps it in the search."""
+    the lane lies to one side and its inner boundary leaves the centred trapezoid (MetaDrive, R 21 m at 10 m/s: the
+    yellow centre line outside it from 12 m on, the left boundary fitted to whatever was left inside, the car
+    under-steered out of the bend). Centring the far edge between last frame's straight lines keeps them in the
+    search. Not on the traced bend's far end: the straight lines are fitted as chords, and a region centred on the
+    curve cut off the outer chord's far part on a gentle bend (the simulator's three_lane_curve: confidence 0.88 →
+    0.35); nor widened on one side only: a yawed car then took the next lane's lines, with confidence, for its own."""
     mask = region_mask(region, far_shift_px)
     mask.flags.writeable = False
     return mask
