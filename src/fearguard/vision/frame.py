@@ -261,11 +261,13 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
     bend, far = None, None
     if p.camera.pitch_deg < PITCHED_DEG:  # a road camera: a model car's low, steep view of a tight track is not traced
-        widths = lane_width_rows(rows, (left, right), region)  # (and its region spans the picture's width over most rows)
+        widths = lane_width_rows(rows, (left, right), region)
         bend = trace_bend(det.maps, region, left, right, widths, _horizon_v_px(p))
-        if p.camera.mount_height_m is not None:  # a mounted camera (on uncalibrated dash-cam footage it did not help:
-            far = aim_point_u(left, right, rows[0], widths[0])  # docs/perception.md, "The road region follows the lane")
-    trackers.memory.remember_far_centre(far)  # where the next frame's road region looks
+        # the next frame's road region follows the lane: mounted cameras only (on uncalibrated dash-cam footage it did
+        # not help: docs/perception.md, "The road region follows the lane"); a model car's region is already wide
+        if p.camera.mount_height_m is not None:
+            far = aim_point_u(left, right, rows[0], widths[0])
+    trackers.memory.remember_far_centre(far)
     return Lanes(
         left=left, right=right,
         seen_left=det.left if tracked.left_accepted else None, seen_right=det.right if tracked.right_accepted else None,

@@ -40,8 +40,8 @@ def steering_from_aim(u_work_px: float, scale: float, camera: CameraModel) -> fl
 
 @dataclass
 class LaneMemory:
-    """What the steering keeps between frames: the lane width at the look-ahead row, the last angle, and how far
-    where the lane centre crossed the road region's top row (where the next frame's region looks: ``lanes.region_toward``)."""
+    """What the steering keeps between frames: the lane width at the look-ahead row, the last angle, and where the lane
+    centre crossed the road region's top row (where the next frame's region looks: ``lanes.region_toward``)."""
 
     lane_width_px: float | None = None
     last_steering_deg: float | None = None
