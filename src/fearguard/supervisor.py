@@ -374,7 +374,7 @@ class FearGuard:
         as the standing obstacle that would demand the same braking (``decision.fear_range_m``): the rules judge that."""
         if unknown_note("obstacle_range_m", cues.obstacle_range_m) is not None:
             return result, ()
-        as_standing = fear_range_m(range_m, speed, closing)
+        as_standing = fear_range_m(range_m, speed, closing, self.rules.policy.moving_object_min_mps)
         if as_standing == range_m:
             return result, ()
         lead_v = lead_speed_mps(speed, closing)

@@ -245,6 +245,7 @@ def policy_from_table(src: TomlSource, data: object, key_path: str = "policy") -
         *((k, getattr(cfg, k) > 0.0, "must be > 0") for k in _POSITIVE_KEYS),
         ("recovery_dwell_s", cfg.recovery_dwell_s >= 0.0, "must be >= 0"),
         ("standstill_mps", cfg.standstill_mps >= 0.0, "must be >= 0"),
+        ("moving_object_min_mps", cfg.moving_object_min_mps >= 0.0, "must be >= 0"),
         ("lane_check_min_deg", cfg.lane_check_min_deg >= 0.0, "must be >= 0"),
         ("lane_check_fraction", 0.0 <= cfg.lane_check_fraction <= 1.0, "must be in [0, 1]"),
         ("recovery_min_confidence", 0.0 <= cfg.recovery_min_confidence <= 1.0, "must be in [0, 1]"),

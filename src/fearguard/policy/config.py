@@ -48,6 +48,7 @@ class PolicyConfig:
     recovery_max_creeps: int = 4  # [-] creeps per EMERGENCY; then the car stays stopped and says why
     recovery_max_total_m: float = 2.0  # [m] total creep distance per EMERGENCY
     standstill_mps: float = 0.05  # [m/s] at or below this the car counts as standing still
+    moving_object_min_mps: float = 0.15  # [m/s] an object ahead slower than this (ego speed − closing speed) stands
     recovery_min_confidence: float = 0.25  # [-] lane_confidence from which a creep steers by the lane seen now
     recovery_blind_m: float = 0.3  # [m] creep distance with nothing of the lane in sight, per EMERGENCY
     recovery_creep_max_deg: float = 6.0  # [deg] a creep steered by the wrapped estimator stays within ± this

@@ -128,19 +128,23 @@ def emergency_step(plan: EmergencyPlan, creep: str, lane_now_deg: float | None, 
     return EmergencyChoice(plan.strategy, plan.cause, plan.cap_mps, steering, tuple(reasons))
 
 
-def fear_range_m(range_m: float, speed_mps: float | None, closing_mps: float | None) -> float:
+def fear_range_m(range_m: float, speed_mps: float | None, closing_mps: float | None, moving_min_mps: float = 0.0) -> float:
     """The range collision fear reads. A standing obstacle at D demands v²/(2D) of braking from the ego's speed v; an
     object ahead that keeps moving demands c²/(2d) at its range d and closing speed c — the braking a standing obstacle
     at d·(v/c)² would demand. So a moving object counts as standing that far (an opening or steady gap: nothing ahead);
     a car closing on a slower one is braked to its speed by the envelope (which still allows for the lead's hardest
     braking), not stopped by fear. Unknown speed or closing speed: the range as it is (standing: the worst). Faster
-    closing reads nearer, never farther."""
+    closing reads nearer, never farther.
+
+    An object whose own speed v − c is at most ``moving_min_mps`` stands: a car stopping in front of a box, its
+    speed estimate decaying toward 0 and the gap steady, must not read the box as a lead moving away (it then drove
+    on into it)."""
     if not math.isfinite(range_m) or speed_mps is None or closing_mps is None or not math.isfinite(closing_mps) or speed_mps <= 0.0:
         return range_m
-    if closing_mps >= speed_mps:
+    if speed_mps - closing_mps <= moving_min_mps:
         return range_m  # the object stands (or comes toward the car)
     if closing_mps <= 0.0:
-        return math.inf  # a steady or opening gap demands no braking
+        return math.inf  # a steady or opening gap behind a moving object demands no braking
     ratio = speed_mps / closing_mps
     return range_m * ratio * ratio  # a float product overflows to inf (** raises)
 

@@ -43,7 +43,8 @@ GATE_CHI2 = 16.3  # [-] chi-square, 3 dof, p = 0.001
 def lead_from_box(box: LeadBox, camera: CameraModel) -> Lead:
     """Bearing of the box centre and ground-plane range of its bottom edge from the car's front (None without mounting
     height)."""
-    return Lead(camera.bearing_deg(box.x_px + 0.5 * box.w_px), camera.range_ahead_m(box.y_px + box.h_px))
+    x, y, w, h = (float(v) for v in (box.x_px, box.y_px, box.w_px, box.h_px))  # numpy scalars of any width: no cast overflow
+    return Lead(camera.bearing_deg(x + 0.5 * w), camera.range_ahead_m(y + h))
 
 
 def detect_lead(
