@@ -24,7 +24,7 @@ from fearguard.cues import Cues
 from fearguard.errors import describe
 from fearguard.lane import LaneGeometry
 from fearguard.observation import Lead, LeadBox, Observation
-from fearguard.readings import reading
+from fearguard.readings import finite_reading, reading
 from fearguard.sensors.localisation import LocalisationState, QrLocaliser
 from fearguard.sensors.ultrasonic import RangeEstimate, UltrasonicFilter
 from fearguard.track.profile import TrackProfile
@@ -140,11 +140,11 @@ class Perception:
         analysis = self._vision(obs.frame, t, box, reasons, facts)
         seen = analysis if analysis is not None else _UNSEEN
         t1 = clock()
-        range_m, estimate = self._range(obs, t, reasons, facts, seen.obstacle)
+        lead = obs.lead if isinstance(obs.lead, Lead) else seen.lead
+        range_m, estimate = self._range(obs, t, reasons, facts, seen.obstacle, lead)
         t2 = clock()
         staleness, loc = self._staleness(obs, t, seen.qr_payloads, facts)
         t3 = clock()
-        lead = obs.lead if isinstance(obs.lead, Lead) else seen.lead
         lead = self._fuse_lead_range(lead, range_m)
         timings = {f"vision.{k}": v for k, v in seen.timings_ms.items()}
         timings.update(vision=(t1 - t0) * 1e3, ultrasonic=(t2 - t1) * 1e3, localisation=(t3 - t2) * 1e3)
@@ -240,13 +240,19 @@ class Perception:
 
     # -- ultrasonic -----------------------------------------------------------------------------
     def _range(
-        self, obs: Observation, t: float, reasons: list[str], facts: list[str], seen: Obstacle | None = None
+        self, obs: Observation, t: float, reasons: list[str], facts: list[str], seen: Obstacle | None = None,
+        lead: Lead | None = None,
     ) -> tuple[float, RangeEstimate | None]:
-        if not self.vehicle.has_ultrasonic:  # no range sensor: the camera's ground-plane range of an object in the lane
-            camera_m = math.inf
+        if not self.vehicle.has_ultrasonic:  # no range sensor: the camera's ground-plane range of an object in the lane,
+            camera_m = math.inf  # or of the vehicle it boxed there, whichever is nearer
             if seen is not None and seen.range_m is not None:
                 facts.append(f"camera: object in the lane at {seen.range_m:.2f} m (ground plane, bearing {seen.bearing_deg:+.1f}°)")
                 camera_m = seen.range_m
+            boxed = lead.usable_range_m if lead is not None and lead.usable else None
+            if lead is not None and boxed is not None and boxed < camera_m:
+                bearing = finite_reading(lead.bearing_deg) or 0.0  # usable: a finite bearing, whatever Real it came as
+                facts.append(f"camera: vehicle ahead in the lane at {boxed:.2f} m (bearing {bearing:+.1f}°)")
+                camera_m = boxed
             return min(camera_m, self._undeclared_range(obs, reasons)), None
         est = self.ultrasonic.update(t, obs.ultrasonic_range_m, obs.ultrasonic_echo_s)
         if math.isfinite(est.range_m):

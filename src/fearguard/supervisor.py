@@ -55,6 +55,7 @@ from fearguard.policy.decision import (
     envelope_step,
     fear_range_m,
     first_limit_mps,
+    follow_step,
     lane_step,
     limit_reason,
     measured_speed,
@@ -314,7 +315,9 @@ class FearGuard:
         choice = lane_step(check, st.estimator_distrusted, steering, lane_now, st.trusted_steering_deg, cfg, v)
         st.estimator_distrusted = choice.distrusted
         wanted, strategy = choice.steering_deg, Strategy.PASS_THROUGH
-        caps = [fear_limit, envelope.speed_mps, choice.cap_mps, self._grace_cap(grace, t, reasons, path_doubt, now_mps)]
+        follow_cap, follow_why = follow_step(range_m, speed, closing, cfg, v)
+        reasons.extend([follow_why] if follow_why else [])
+        caps = [fear_limit, envelope.speed_mps, choice.cap_mps, follow_cap, self._grace_cap(grace, t, reasons, path_doubt, now_mps)]
         line_m = perceived.stop_line_m if perceived is not None else None
         st.stop_line, line_cap, line_why = next_stop_line(st.stop_line, line_m, speed_now, t, dt, cfg, v, clear_m)
         caps.append(line_cap)
@@ -341,7 +344,7 @@ class FearGuard:
         target = min(caps)
         limit = max(0.0, rate_limited_mps(st.limit_mps if st.limit_mps is not None else first_limit_mps(speed, v), target, dt, cfg))
         st.last_t_s, st.limit_mps = t, limit
-        reasons.append(limit_reason(limit, fear_limit, envelope.speed_mps, target, envelope.seen_m, lateral))
+        reasons.append(limit_reason(limit, fear_limit, envelope.speed_mps, target, envelope.seen_m, lateral, follow_cap))
         reasons.extend(rule_reasons(result, mode, perceived.facts if perceived is not None else ()))
         reasons.extend(notes)
         return Command(
@@ -491,8 +494,9 @@ class FearGuard:
 
     @staticmethod
     def _range_for_policy(cues: Cues) -> float:
-        """Obstacle range for the envelope, unknown meaning what it means for fear (worst: 0)."""
-        return worst_filled(cues.values(), 0.0)[0][OBSTACLE_RANGE]
+        """Obstacle range for the envelope, unknown meaning what it means for fear (worst: 0); a float whatever Real the
+        caller gave (a Fraction cannot be formatted into a reason)."""
+        return float(worst_filled(cues.values(), 0.0)[0][OBSTACLE_RANGE])
 
     # -- faults ---------------------------------------------------------------------------------
     def _fault_command(

@@ -241,6 +241,7 @@ def policy_from_table(src: TomlSource, data: object, key_path: str = "policy") -
         ("comfort_accel_mps2", cfg.comfort_accel_mps2 > 0.0, "must be > 0"),
         ("crawl_fraction", 0.0 <= cfg.crawl_fraction <= 1.0, "must be in [0, 1]"),
         ("follow_time_gap_s", cfg.follow_time_gap_s > 0.0, "must be > 0"),
+        ("follow_decel_mps2", cfg.follow_decel_mps2 > 0.0, "must be > 0"),
         ("follow_gain", cfg.follow_gain >= 0.0, "must be >= 0"),
         *((k, getattr(cfg, k) > 0.0, "must be > 0") for k in _POSITIVE_KEYS),
         ("recovery_dwell_s", cfg.recovery_dwell_s >= 0.0, "must be >= 0"),

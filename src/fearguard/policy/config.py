@@ -38,7 +38,8 @@ class PolicyConfig:
     hold_s: float = 2.0  # [s] time below the exit threshold before EMERGENCY is left
     comfort_accel_mps2: float = 0.5  # [m/s²] fastest rise of the speed limit
     crawl_fraction: float = 0.15  # [-] of max speed, CRAWL cap (and FOLLOW_LEAD without a range)
-    follow_time_gap_s: float = 1.5  # [s] FOLLOW_LEAD speed = lead range / time gap
+    follow_time_gap_s: float = 1.5  # [s] a moving object ahead is followed with this time gap (and FOLLOW_LEAD's range / gap)
+    follow_decel_mps2: float = 0.5  # [m/s²] braking planned to fall back to a slower moving object's speed at the time gap
     follow_gain: float = 1.0  # [deg/deg] steering per degree of lead bearing
     watchdog_frames: int = 10  # [frames] a frame later than this many typical periods after the last is a stall
     watchdog_age_s: float = 1.0  # [s] ... and later than this (openpilot: a message older than max(10 periods, …))

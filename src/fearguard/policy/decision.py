@@ -4,6 +4,7 @@ The supervisor keeps the clock, the state (mode machine, recovery, the steering 
 here is a pure function of what it is handed, so each can be tested, and read, on its own:
 
     envelope_step   the stopping envelope for the obstacle range (RSS), and the distance it plans with
+    follow_step     a moving object ahead → the time-gap cap that follows it at its speed
     lane_step       the lane check's verdict → the steering wanted, a cap, CAUTION, and whether the estimator is distrusted
     doubt_step      a road picture not trusted, no EMERGENCY yet → the steering last given on a calm picture, held
     emergency_step  an EMERGENCY plan → the strategy, its cap, the steering (a creep steers by the lane seen now)
@@ -11,7 +12,7 @@ here is a pure function of what it is handed, so each can be tested, and read, o
     limit_reason    which cap set the speed limit
     rule_reasons    the rules that drove fear, and perception's facts, when fear is up or the mode is not NORMAL
 
-Speed limit = the smallest cap (fear, envelope, lane check, emergency plan, lateral), rate-limited upward
+Speed limit = the smallest cap (fear, envelope, follow, lane check, emergency plan, lateral), rate-limited upward
 (``speed.rate_limited_mps``): a step can only add a cap, never lift one.
 """
 
@@ -58,6 +59,33 @@ def envelope_step(range_m: float, speed_mps: float | None, closing_mps: float | 
     seen_m = range_m if math.isfinite(range_m) or not vehicle.has_ultrasonic else vehicle.ultrasonic_max_range_m
     lead = lead_speed_mps(speed_mps, closing_mps) if seen_m == range_m else 0.0
     return Envelope(envelope_speed_mps(seen_m, vehicle, lead), seen_m)
+
+
+def follow_step(range_m: float, speed_mps: float | None, closing_mps: float | None, cfg: PolicyConfig,
+                vehicle: VehicleLimits) -> tuple[float, str]:
+    """An object ahead that keeps moving is followed, not only braked for (what an ACC does): the car settles behind it
+    at its speed v_l with the gap d* = margin + ``follow_time_gap_s`` · v_l, well outside the RSS distance, so the
+    range's noise (a camera's box jitters by metres) never brings the gap near the envelope and collision fear. Farther
+    than d*, the cap is the speed from which ``follow_decel_mps2`` brakes to v_l within d − d*: √(v_l² + 2a(d − d*));
+    nearer, (d − margin) / gap: slower than the lead until the gap is back. An object that stands (no faster than
+    ``moving_object_min_mps``), or unknown motion: no cap here (the envelope and fear answer). (cap, reason; inf and
+    "" when it does not bind)."""
+    if not math.isfinite(range_m) or speed_mps is None or closing_mps is None or not math.isfinite(closing_mps):
+        return math.inf, ""
+    lead = speed_mps - closing_mps
+    if lead <= cfg.moving_object_min_mps:
+        return math.inf, ""
+    margin, gap_s = float(vehicle.stop_margin_m), float(cfg.follow_time_gap_s)  # any Real a caller built them from
+    wanted = margin + gap_s * lead
+    if range_m >= wanted:
+        decel = float(min(cfg.follow_decel_mps2, vehicle.max_decel_mps2))
+        cap = math.sqrt(lead * lead + 2.0 * decel * (range_m - wanted))
+    else:
+        cap = max(0.0, range_m - margin) / gap_s
+    if cap >= speed_mps:
+        return cap, ""
+    return cap, (f"following the object ahead at {range_m:.1f} m (its speed {lead:.1f} m/s) with a {gap_s:g} s time gap "
+                 f"({wanted:.1f} m): {cap:.2f} m/s")
 
 
 @dataclass(frozen=True)
@@ -161,12 +189,15 @@ def motion_reasons(imminent: bool, envelope_mps: float, range_m: float, speed_no
     return ()
 
 
-def limit_reason(limit: float, fear_limit: float, envelope: float, target: float, range_m: float, lateral: float) -> str:
+def limit_reason(limit: float, fear_limit: float, envelope: float, target: float, range_m: float, lateral: float,
+                 follow: float = math.inf) -> str:
     """Which cap set the speed limit (or that it is still rising toward it)."""
     if limit < target - 1e-12:
         return f"speed limit {limit:.2f} m/s: rising at the comfort acceleration toward {target:.2f} m/s"
     if envelope <= fear_limit and envelope <= target + 1e-12 and not math.isinf(envelope):
         return f"speed limit {limit:.2f} m/s: safe distance envelope for an obstacle at {range_m:.2f} m"
+    if follow <= fear_limit and follow <= target + 1e-12:
+        return f"speed limit {limit:.2f} m/s: the time gap to the object ahead at {range_m:.2f} m"
     if lateral <= target + 1e-12:
         return f"speed limit {limit:.2f} m/s: lateral acceleration at this steering angle"
     if fear_limit <= target + 1e-12:
