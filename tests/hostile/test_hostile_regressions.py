@@ -8,6 +8,7 @@ reported as faults, and ``step`` raising through an unprintable exception.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from decimal import Decimal
 from fractions import Fraction
 from pathlib import Path
@@ -283,6 +284,23 @@ def test_a_lead_bearing_given_as_a_fraction_is_followed() -> None:
     no_internal_error(cmd)
     assert cmd.strategy is fg.Strategy.FOLLOW_LEAD
     assert cmd.steering_deg == pytest.approx(1 / 3 * fg.load_rules().policy.follow_gain)
+
+
+def test_a_policy_built_in_code_from_fractions_explains_itself() -> None:
+    """Rules built in code may hold any Real: the reasons that print the time gap and the creep's numbers format them
+    as floats (a Fraction has no '.1f' format on Python 3.11: the reason raised inside step, reported as a fault)."""
+    rules = fg.load_rules()
+    frac = {name: Fraction(str(getattr(rules.policy, name))) for name in
+            ("follow_time_gap_s", "recovery_creep_m", "recovery_creep_s", "recovery_dwell_s")}
+    guard = fg.FearGuard(lambda frame: 0.0, vehicle=ALL_SENSORS, rules=replace(rules, policy=replace(rules.policy, **frac)))
+    lost_road = fg.Cues(0.0, 120.0, 1.0, 2.5, 0.5)
+    cmds = [guard.step(fg.Observation(t_s=0.1 * i, cues=lost_road, speed_mps=0.5, lead=fg.Lead(bearing_deg=2.0, range_m=2.5)))
+            for i in range(10)]
+    for cmd in cmds:
+        no_internal_error(cmd)
+        assert cmd.cause is not None  # not a fault
+    assert cmds[-1].strategy is fg.Strategy.FOLLOW_LEAD
+    assert any(f"{float(frac['follow_time_gap_s']):.1f} s gap" in r for r in cmds[-1].reasons), cmds[-1].reasons
 
 
 def test_a_timestamp_of_1e308_does_not_stop_the_ultrasonic_clock_for_good() -> None:

@@ -70,9 +70,9 @@ def follow_step(range_m: float, speed_mps: float | None, closing_mps: float | No
     nearer, (d − margin) / gap: slower than the lead until the gap is back. An object that stands (no faster than
     ``moving_object_min_mps``), or unknown motion: no cap here (the envelope and fear answer). (cap, reason; inf and
     "" when it does not bind)."""
-    if not math.isfinite(range_m) or speed_mps is None or closing_mps is None or not math.isfinite(closing_mps):
+    if not math.isfinite(range_m) or speed_mps is None:
         return math.inf, ""
-    lead = speed_mps - closing_mps
+    lead = lead_speed_mps(speed_mps, closing_mps)  # unknown closing speed: 0, it stands
     if lead <= cfg.moving_object_min_mps:
         return math.inf, ""
     margin, gap_s = float(vehicle.stop_margin_m), float(cfg.follow_time_gap_s)  # any Real a caller built them from
@@ -169,7 +169,7 @@ def fear_range_m(range_m: float, speed_mps: float | None, closing_mps: float | N
     on into it)."""
     if not math.isfinite(range_m) or speed_mps is None or closing_mps is None or not math.isfinite(closing_mps) or speed_mps <= 0.0:
         return range_m
-    if speed_mps - closing_mps <= moving_min_mps:
+    if lead_speed_mps(speed_mps, closing_mps) <= moving_min_mps:
         return range_m  # the object stands (or comes toward the car)
     if closing_mps <= 0.0:
         return math.inf  # a steady or opening gap behind a moving object demands no braking

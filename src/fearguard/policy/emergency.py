@@ -89,7 +89,7 @@ def emergency_plan(
             cap = rng / cfg.follow_time_gap_s if rng is not None else crawl_cap
             bearing = float(lead.bearing_deg)  # usable: a reading (readings.py), e.g. a Fraction, as a float
             steer = float(np.clip(cfg.follow_gain * bearing, -vehicle.max_steering_deg, vehicle.max_steering_deg))
-            gap = f"range {rng:.2f} m, {cfg.follow_time_gap_s:.1f} s gap" if rng is not None else "no range: crawl speed"
+            gap = f"range {rng:.2f} m, {float(cfg.follow_time_gap_s):.1f} s gap" if rng is not None else "no range: crawl speed"
             follow = f"{why}: follow the lead at bearing {bearing:+.1f} deg ({gap})"
             plans.append(EmergencyPlan(Strategy.FOLLOW_LEAD, cap, steer, follow, cause))
         elif cause is Cause.ROAD and creep:
@@ -167,7 +167,8 @@ def next_recovery(
                 or total_m >= cfg.recovery_max_total_m or (blind and blind_m >= cfg.recovery_blind_m))
         if eligible and not done:
             why = (f"re-acquisition creep {rec.creeps} of {cfg.recovery_max_creeps} "
-                   f"({creep_m:.2f} of {cfg.recovery_creep_m:.2f} m, {t_s - rec.creep_since_s:.1f} of {cfg.recovery_creep_s:.1f} s)")
+                   f"({creep_m:.2f} of {float(cfg.recovery_creep_m):.2f} m, "
+                   f"{t_s - rec.creep_since_s:.1f} of {float(cfg.recovery_creep_s):.1f} s)")
             return Recovery(rec.creeps, total_m, None, rec.creep_since_s, creep_m, blind_m), why
         unused = not eligible and creep_m <= 0.0  # ended before the car moved (the path stopped being known clear): no try spent
         return Recovery(rec.creeps - 1 if unused else rec.creeps, total_m, blind_m=blind_m), ""
@@ -199,5 +200,5 @@ def recovery_status(rec: Recovery, road_stop: bool, cfg: PolicyConfig, t_s: floa
         return (f"recovery: {rec.blind_m:.2f} m crept with nothing of the lane in sight (at most {cfg.recovery_blind_m:.2f} m "
                 f"blind), the lane is still not seen: staying stopped")
     if rec.still_since_s is not None:
-        return f"recovery: analysing at standstill ({t_s - rec.still_since_s:.1f} of {cfg.recovery_dwell_s:.1f} s before a creep)"
+        return f"recovery: analysing at standstill ({t_s - rec.still_since_s:.1f} of {float(cfg.recovery_dwell_s):.1f} s before a creep)"
     return "recovery: waiting for standstill before a creep"
