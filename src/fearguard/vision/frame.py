@@ -293,7 +293,7 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     external = given if isinstance(given, LeadBox) and given.usable else None
     box = external
     if external is None:
-        found = detect_lead(p.gray, hls, p.region, expected_l, expected_r, reference)
+        found = detect_lead(p.gray, hls, p.region, expected_l, expected_r, reference, p.bgr)
         box = trackers.leads.update(t_s, found.scaled(p.scale) if found is not None else None)
     boxes = (box.scaled(1.0 / p.scale).as_int(),) if box is not None else ()
     surface = surface_maps(p.gray, hls, lanes.features, p.region, lanes.paint_integral)

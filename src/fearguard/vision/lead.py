@@ -48,9 +48,13 @@ def lead_from_box(box: LeadBox, camera: CameraModel) -> Lead:
 
 
 def detect_lead(
-    gray: np.ndarray, hls: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine, reference: float
+    gray: np.ndarray, hls: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine, reference: float,
+    frame: np.ndarray | None = None,
 ) -> LeadBox | None:
-    """The nearest vehicle-like box in the ego lane of a working image, or None."""
+    """The nearest vehicle-like box in the ego lane of a working image, or None.
+    ``frame``: the BGR picture the working image was reduced from (any whole or fractional multiple of its size); a
+    box's tail lights above the road rows are looked for there (a car 22 m ahead seen from 1.5 m up has its lamps
+    above the road region's top row)."""
     if not math.isfinite(reference) or reference < 20:
         return None  # too dark to tell an underside from the road
     w = gray.shape[1]
@@ -76,7 +80,7 @@ def detect_lead(
     # the shape tests, vectorised over all blobs (a noisy night frame has thousands of dark specks)
     x, y, bw, bh, area = stats.T
     v_bottom = y + bh - 1
-    lu, ru = left.u_at(v_bottom.astype(float)), right.u_at(v_bottom.astype(float))
+    lu, ru = lu[v_bottom - top], ru[v_bottom - top]
     lane_w = ru - lu
     centre = x + 0.5 * bw
     keep = (v_bottom < bottom - 1) & (bh <= MAX_ASPECT * bw)  # not touching the image bottom, not too tall
@@ -94,13 +98,22 @@ def detect_lead(
         foreign = (np.abs(patch - reference) > dev) | (sat >= 110)
         if foreign.mean() < ABOVE_FOREIGN_MIN:
             continue
-        hue = hls[y0 : v_bottom_i + 1, x : x + bw, 0]
-        red = ((hue <= RED_HUE_MAX) | (hue >= 180 - RED_HUE_MAX)) & (hls[y0 : v_bottom_i + 1, x : x + bw, 2] >= RED_SAT_MIN)
-        if red.mean() < TAIL_LIGHT_SHARE:
+        red = _red_pixels(hls[y_road : v_bottom_i + 1, x : x + bw])
+        if y0 < top and frame is not None:  # the box reaches above the road rows (grey and HLS are 0 there): the frame's
+            k = frame.shape[1] / gray.shape[1]  # pixels, in working pixels' worth
+            above = frame[int(y0 * k) : int(top * k), int(x * k) : math.ceil((x + bw) * k)]
+            red += _red_pixels(cv2.cvtColor(above, cv2.COLOR_BGR2HLS)) / (k * k) if above.size else 0.0
+        if red < TAIL_LIGHT_SHARE * bw * (v_bottom_i - y0 + 1):
             continue  # no tail lights: a shadow or a dark patch, not the rear of a vehicle
         best = LeadBox(float(x), float(y0), float(bw), float(v_bottom_i - y0 + 1))
         break
     return best
+
+
+def _red_pixels(hls: np.ndarray) -> float:
+    """How many pixels of an HLS patch are tail-light red."""
+    hue = hls[..., 0]
+    return float(np.count_nonzero(((hue <= RED_HUE_MAX) | (hue >= 180 - RED_HUE_MAX)) & (hls[..., 2] >= RED_SAT_MIN)))
 
 
 class LeadTracker:
