@@ -20,6 +20,9 @@ WORKER_YAML = """distributed:
   nanny:
     pre-spawn-environ:
       MALLOC_TRIM_THRESHOLD_: null
+  worker:
+    profile:
+      enabled: false
 """  # the file docs/cluster.md tells every worker machine to have
 
 
