@@ -41,9 +41,9 @@ INSTALL_HINT = "pip install 'fearguard[cluster]' (Dask's distributed scheduler)"
 # switches off glibc's sliding mmap threshold: frame-sized arrays are then mapped and unmapped afresh and a simulator row
 # ran ~1.5-2× slower than in this process (0.46 → 0.66 s measured). Unset, workers allocate as this process does; remote
 # workers are set up the same way (docs/cluster.md: the YAML file, or --no-nanny).
-# Dask's statistical profiler (distributed.worker.profile) samples the task thread's stack from the worker's event loop
-# every 10 ms; with MetaDrive building its map on the task thread, Panda3D aborted the worker process
-# ("ReMutexPosixImpl::unlock(): Assertion `result == 0' failed", on the event loop's thread): 17 of 25 one-row suites
+# Dask's statistical profiler (distributed.worker.profile) samples the task thread's stack every 10 ms and folds the
+# samples in on the worker's event loop; with MetaDrive building its map on the task thread, Panda3D aborted the worker
+# process ("ReMutexPosixImpl::unlock(): Assertion `result == 0' failed", on the event loop's thread): 17 of 25 one-row suites
 # here died on all four attempts (KilledWorker), 0 of 6 with the profiler off. Nothing here reads its profiles.
 WORKER_CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None, "distributed.worker.profile.enabled": False}
 ADDRESS = re.compile(r"((tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:]+\]|[A-Za-z0-9_.-]+)(:\d{1,5})?")  # a scheduler's address
