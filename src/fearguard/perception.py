@@ -70,6 +70,7 @@ class Perceived:
     analysis: FrameAnalysis | None = None  # this frame's analysis by the pipeline; None when it did not run
     lane: LaneGeometry | None = None  # the ego lane in metres on the ground (needs a camera with its mounting height)
     lane_steering_deg: float | None = None  # the frame pipeline's own steering toward the lane centre (finite), if any
+    lane_guide: float = 0.0  # [-] 0..1 how well a boundary found this frame steers that angle (``LaneEvidence.guide``); 0: none
     clear_m: float = 0.0  # [m] how far ahead the path is known clear (range sensor, the camera's object search); 0: unknown
     stop_line_m: float | None = None  # [m] a stop line across the ego lane ahead, as the camera's lane search found it
     range_estimate: RangeEstimate | None = None
@@ -152,8 +153,9 @@ class Perception:
         cues = Cues(lane_confidence=lane_conf, brightness=brightness, occlusion=occlusion,
                     obstacle_range_m=range_m, qr_staleness_s=staleness, familiarity=familiarity)
         lane, lane_steering = self._lane(analysis)
+        guide = analysis.evidence.guide if analysis is not None and analysis.evidence is not None and lane_steering is not None else 0.0
         return Perceived(cues=cues, lead=lead, alerts=tuple(reasons), facts=tuple(facts), analysis=analysis, lane=lane,
-                         lane_steering_deg=lane_steering, clear_m=self._clear_m(range_m, analysis, obs),
+                         lane_steering_deg=lane_steering, lane_guide=guide, clear_m=self._clear_m(range_m, analysis, obs),
                          stop_line_m=analysis.stop_line_m if analysis is not None else None,
                          range_estimate=estimate, localisation=loc, timings_ms=timings)
 

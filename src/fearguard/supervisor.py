@@ -37,6 +37,7 @@ from fearguard.policy import (
     emergency_plan,
     fear_speed_mps,
     imminent_collision,
+    lane_reacquired,
     lateral_speed_mps,
     lead_speed_mps,
     next_mode,
@@ -364,7 +365,11 @@ class FearGuard:
         road_stop = recovery_eligible(st.mode, active, lead, imminent)
         confidence = finite_reading(cues.lane_confidence)
         seen = confidence is not None and confidence >= cfg.recovery_min_confidence  # a lane this faint steers nothing
-        st.recovery, creep = next_recovery(st.recovery, road_stop and not unclear, t, dt, speed_now, cfg, blind=not seen)
+        # a boundary found frame after frame steers a creep even when the picture as a whole is not trusted (glare)
+        guided = perceived is not None and perceived.lane_guide >= cfg.recovery_min_guide
+        st.recovery, creep = next_recovery(st.recovery, road_stop and not unclear, t, dt, speed_now, cfg, blind=not seen,
+                                           guided=guided)
+        seen = seen or lane_reacquired(st.recovery, t, cfg)
         plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t)
         status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=not seen)
         lane_now = perceived.lane_steering_deg if perceived is not None and seen else None

@@ -65,6 +65,7 @@ BAD_FILES = [
     (("hold_s = 2.0 ", "hold_secs = 2.0 "), "unknown key 'hold_secs' (did you mean 'hold_s'?)", r"line \d+, key policy\.hold_secs"),
     (("hold_s = 2.0 ", "hold_s = -1.0 "), "must be >= 0", r"policy\.hold_s"),
     (("enter_frames = 3 ", "enter_frames = 0 "), "whole number >= 1", r"policy\.enter_frames"),
+    (("recovery_min_guide = 0.15 ", "recovery_min_guide = 1.5 "), "must be in [0, 1]", r"policy\.recovery_min_guide"),
     (("emergency_exit_fear = 0.5 ", "emergency_exit_fear = 0.8 "), "below emergency_enter_fear", r"policy\.emergency_exit_fear"),
     (("high = 0.4, very_high = 0.3", "high = 0.4, very_high = 0.5"), "must not increase with fear", r"policy\.speed_fraction"),
     (("high = 0.4, very_high = 0.3", "high = 0.4"), "needs exactly the levels", r"policy\.speed_fraction"),

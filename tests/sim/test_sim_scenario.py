@@ -235,7 +235,7 @@ def test_every_bundled_scenario_loads_with_expectations(path: Path) -> None:
     sc = load_scenario(path)
     assert sc.name == path.stem
     assert sc.description
-    assert 8.0 <= sc.duration_s <= 30.0
+    assert 8.0 <= sc.duration_s <= 45.0  # glare_zone_clear: 8 m crept at a model car's crawl speed takes 27 s
     assert sc.expectations.names(), "a library scenario must say what a safe run achieves"
     assert sc.expectations.no_collision is True
     assert math.isfinite(sc.road.length_m)

@@ -250,6 +250,7 @@ def policy_from_table(src: TomlSource, data: object, key_path: str = "policy") -
         ("lane_check_min_deg", cfg.lane_check_min_deg >= 0.0, "must be >= 0"),
         ("lane_check_fraction", 0.0 <= cfg.lane_check_fraction <= 1.0, "must be in [0, 1]"),
         ("recovery_min_confidence", 0.0 <= cfg.recovery_min_confidence <= 1.0, "must be in [0, 1]"),
+        ("recovery_min_guide", 0.0 <= cfg.recovery_min_guide <= 1.0, "must be in [0, 1]"),
         ("road_enter_s", cfg.road_enter_s >= 0.0, "must be >= 0"),
         ("stop_line_wait_s", cfg.stop_line_wait_s >= 0.0, "must be >= 0 (0: stop lines are not stopped for)"),
         ("stop_line_cross_m", cfg.stop_line_cross_m > 0.0, "must be > 0"),

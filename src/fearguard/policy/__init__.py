@@ -26,6 +26,7 @@ from fearguard.policy.emergency import (
     creep_clearance,
     creep_needs_m,
     emergency_plan,
+    lane_reacquired,
     next_recovery,
     recovery_eligible,
     recovery_exhausted,
@@ -52,6 +53,6 @@ __all__ = [
     "CAUSE_WORDS", "CLOSING_WINDOW_S", "ENVELOPE_SHRINK", "MODE_ORDER", "STRATEGY_ORDER", "TIME_EPS_S", "EmergencyPlan", "Latch",
     "Lead", "Mode", "ModeState", "PolicyConfig", "Recovery", "Strategy", "active_causes", "closing_speed_from_ranges",
     "creep_clearance", "creep_needs_m", "emergency_plan", "envelope_speed_mps", "fear_speed_mps", "imminent_collision",
-    "lateral_speed_mps", "lead_speed_mps", "next_mode", "next_recovery", "oscillating", "rate_limited_mps",
+    "lane_reacquired", "lateral_speed_mps", "lead_speed_mps", "next_mode", "next_recovery", "oscillating", "rate_limited_mps",
     "rate_limited_steering_deg", "recovery_eligible", "recovery_exhausted", "recovery_status", "stopping_distance_m", "watchdog_s",
 ]

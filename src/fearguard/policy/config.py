@@ -51,6 +51,7 @@ class PolicyConfig:
     standstill_mps: float = 0.05  # [m/s] at or below this the car counts as standing still
     moving_object_min_mps: float = 0.15  # [m/s] an object ahead slower than this (ego speed − closing speed) stands
     recovery_min_confidence: float = 0.25  # [-] lane_confidence from which a creep steers by the lane seen now
+    recovery_min_guide: float = 0.15  # [-] a boundary's guide (LaneEvidence.guide) from which a frame found the lane
     recovery_blind_m: float = 0.3  # [m] creep distance with nothing of the lane in sight, per EMERGENCY
     recovery_creep_max_deg: float = 6.0  # [deg] a creep steered by the wrapped estimator stays within ± this
     road_enter_s: float = 0.5  # [s] a road-picture-only emergency with the path known clear waits this long, in CAUTION

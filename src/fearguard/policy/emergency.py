@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 
 import numpy as np
@@ -107,6 +107,10 @@ def emergency_plan(
 
 
 # -- recovery: analyse, then act ------------------------------------------------------------------
+GUIDE_GAP_S = 0.1  # [s] a boundary missed this long (a frame or two at 20 Hz: glare leaves a line at support 0.25-0.4, and
+#   some frames miss it) does not end a spell of frames that found it; a shadow's edge found here and there is no spell
+
+
 @dataclass(frozen=True)
 class Recovery:
     """The re-acquisition memory of one EMERGENCY: creeps done, distance crept, the dwell and the creep under way."""
@@ -117,6 +121,9 @@ class Recovery:
     creep_since_s: float | None = None  # the current creep started at (None: not creeping)
     creep_m: float = 0.0  # distance of the current creep
     blind_m: float = 0.0  # distance crept with nothing of the lane in sight, in this EMERGENCY
+    guided_since_s: float | None = None  # a boundary found in the frames since, gaps of at most GUIDE_GAP_S (None: no such spell)
+    guided_last_s: float | None = None  # the last frame that found one
+    guided_m: float = 0.0  # distance crept steered by the lane re-acquired, in this EMERGENCY (reported, not bounded)
 
 
 def recovery_eligible(state: ModeState, active: frozenset[Cause], lead: Lead | None, imminent: bool) -> bool:
@@ -146,6 +153,7 @@ def creep_clearance(clear_m: float, cfg: PolicyConfig, vehicle: VehicleLimits) -
 
 def next_recovery(
     rec: Recovery, eligible: bool, t_s: float, dt_s: float, speed_mps: float, cfg: PolicyConfig, blind: bool = False,
+    guided: bool = False,
 ) -> tuple[Recovery, str]:
     """Advance the recovery one frame; returns the new memory and, while creeping, the creep's reason (else "").
 
@@ -156,12 +164,30 @@ def next_recovery(
     creep is how the car finds them again; a flicker of the picture during a creep does not end it. But a creep with
     nothing of the lane in sight (``blind``) steers blind, and on a curve any steering error leaves the lane within a few
     metres: blind metres end at ``recovery_blind_m`` per EMERGENCY.
+    A boundary found frame after frame for ``recovery_dwell_s`` (``guided``, a frame or two missed at most: a line read where the track
+    expected it, in glare or beside a hidden stretch; ``lane_reacquired``) is the lane re-acquired: the budget starts
+    afresh (tries, distance, blind metres — a blind stretch's drift counts from where the lane was last seen), a creep
+    under way goes on steered by it, and a car standing still creeps again after its dwell. Through 8 m of low sun that
+    leaves one line readable the car crawls on with the path known clear, instead of stopping for good after the
+    budget's 2 m. A line found in a frame here and there (a shadow's edge) is no re-acquisition.
     The distance is the speed integrated over time (unknown speed counts as the top speed: the creep ends sooner).
     """
     moved = max(0.0, speed_mps) * max(dt_s, 0.0)
-    blind_m = rec.blind_m
-    if rec.creep_since_s is not None:
-        blind_m += moved if blind else 0.0  # only a creep's own metres count (following a lead is no blind creep)
+    spell = rec.guided_since_s is not None and rec.guided_last_s is not None and t_s - rec.guided_last_s <= GUIDE_GAP_S + TIME_EPS_S
+    since = rec.guided_since_s if spell else (t_s if guided else None)
+    rec = replace(rec, guided_since_s=since, guided_last_s=t_s if guided else rec.guided_last_s)
+    creeping = rec.creep_since_s is not None
+    if lane_reacquired(rec, t_s, cfg):  # a fresh budget from here
+        rec = Recovery(creeps=1 if creeping else 0, still_since_s=rec.still_since_s, creep_since_s=t_s if creeping else None,
+                       guided_since_s=since, guided_last_s=rec.guided_last_s, guided_m=rec.guided_m)
+        if creeping and eligible:
+            guided_m = rec.guided_m + moved
+            why = (f"re-acquisition creep guided by the lane boundary seen now ({guided_m:.2f} m so far; the budget counts "
+                   f"from where it is lost)")
+            return replace(rec, guided_m=guided_m), why
+        blind = False
+    if creeping:
+        blind_m = rec.blind_m + (moved if blind else 0.0)  # only a creep's own metres count (following a lead is no blind creep)
         creep_m, total_m = rec.creep_m + moved, rec.total_m + moved
         done = (creep_m >= cfg.recovery_creep_m or t_s - rec.creep_since_s >= cfg.recovery_creep_s - TIME_EPS_S
                 or total_m >= cfg.recovery_max_total_m or (blind and blind_m >= cfg.recovery_blind_m))
@@ -169,16 +195,23 @@ def next_recovery(
             why = (f"re-acquisition creep {rec.creeps} of {cfg.recovery_max_creeps} "
                    f"({creep_m:.2f} of {float(cfg.recovery_creep_m):.2f} m, "
                    f"{t_s - rec.creep_since_s:.1f} of {float(cfg.recovery_creep_s):.1f} s)")
-            return Recovery(rec.creeps, total_m, None, rec.creep_since_s, creep_m, blind_m), why
+            return replace(rec, total_m=total_m, still_since_s=None, creep_m=creep_m, blind_m=blind_m), why
         unused = not eligible and creep_m <= 0.0  # ended before the car moved (the path stopped being known clear): no try spent
-        return Recovery(rec.creeps - 1 if unused else rec.creeps, total_m, blind_m=blind_m), ""
-    if speed_mps > cfg.standstill_mps or recovery_exhausted(rec, cfg) or (blind and blind_m >= cfg.recovery_blind_m):
-        return Recovery(rec.creeps, rec.total_m, blind_m=blind_m), ""
+        return replace(rec, creeps=rec.creeps - 1 if unused else rec.creeps, total_m=total_m, still_since_s=None,
+                       creep_since_s=None, creep_m=0.0, blind_m=blind_m), ""
+    if speed_mps > cfg.standstill_mps or recovery_exhausted(rec, cfg) or (blind and rec.blind_m >= cfg.recovery_blind_m):
+        return replace(rec, still_since_s=None), ""
     still = t_s if rec.still_since_s is None else rec.still_since_s
     if not eligible or t_s - still < cfg.recovery_dwell_s - TIME_EPS_S:
-        return Recovery(rec.creeps, rec.total_m, still, blind_m=blind_m), ""  # the dwell counts standing still; the creep waits
+        return replace(rec, still_since_s=still), ""  # the dwell counts standing still; the creep waits
     why = f"re-acquisition creep {rec.creeps + 1} of {cfg.recovery_max_creeps} after {t_s - still:.1f} s at standstill"
-    return Recovery(rec.creeps + 1, rec.total_m, None, t_s, 0.0, blind_m), why
+    return replace(rec, creeps=rec.creeps + 1, still_since_s=None, creep_since_s=t_s, creep_m=0.0), why
+
+
+def lane_reacquired(rec: Recovery, t_s: float, cfg: PolicyConfig) -> bool:
+    """A boundary has been found frame after frame (gaps of at most ``GUIDE_GAP_S``) for ``recovery_dwell_s``: the lane is
+    re-acquired, and a creep steers by it."""
+    return rec.guided_since_s is not None and t_s - rec.guided_since_s >= cfg.recovery_dwell_s - TIME_EPS_S
 
 
 def recovery_exhausted(rec: Recovery, cfg: PolicyConfig) -> bool:

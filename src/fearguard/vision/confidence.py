@@ -37,6 +37,14 @@ class LaneEvidence:
     agreement: float
     visibility: float
 
+    @property
+    def guide(self) -> float:
+        """How well the best boundary found this frame can steer, whatever the rest of the picture shows: its support ×
+        geometry × agreement, the visibility left out. A washed-out or half-hidden picture is not trusted (the confidence
+        says so), but a line still found on its readable part, where the track expected it, still says where the lane
+        runs: low sun over a model-car track left the solid left line at support 0.42, agreement 1.00, confidence 0.01."""
+        return _unit(max(self.support_left, self.support_right) * self.geometry * self.agreement)
+
 
 def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadRegion, lane_width_px: float) -> float:
     """1 when the detected boundary lies on the tracked one (mid and bottom rows), 0 at AGREEMENT_SCALE of a lane width apart."""
