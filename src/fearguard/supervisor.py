@@ -369,7 +369,7 @@ class FearGuard:
         guided = perceived is not None and perceived.lane_guide >= cfg.recovery_min_guide
         st.recovery, creep = next_recovery(st.recovery, road_stop and not unclear, t, dt, speed_now, cfg, blind=not seen,
                                            guided=guided)
-        seen = seen or lane_reacquired(st.recovery, t, cfg)
+        seen = seen or lane_reacquired(st.recovery, t, cfg)  # the re-acquired lane steers the creep and is no blind stretch
         plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t)
         status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=not seen)
         lane_now = perceived.lane_steering_deg if perceived is not None and seen else None

@@ -164,18 +164,19 @@ def next_recovery(
     creep is how the car finds them again; a flicker of the picture during a creep does not end it. But a creep with
     nothing of the lane in sight (``blind``) steers blind, and on a curve any steering error leaves the lane within a few
     metres: blind metres end at ``recovery_blind_m`` per EMERGENCY.
-    A boundary found frame after frame for ``recovery_dwell_s`` (``guided``, a frame or two missed at most: a line read where the track
-    expected it, in glare or beside a hidden stretch; ``lane_reacquired``) is the lane re-acquired: the budget starts
-    afresh (tries, distance, blind metres — a blind stretch's drift counts from where the lane was last seen), a creep
+    A boundary found frame after frame for ``recovery_dwell_s`` (``guided``, a frame or two missed at most: a line read
+    where the track expected it, in glare or beside a hidden stretch; ``lane_reacquired``) is the lane re-acquired: the
+    budget starts afresh (tries, distance, blind metres — a blind stretch's drift counts from where the lane was last seen), a creep
     under way goes on steered by it, and a car standing still creeps again after its dwell. Through 8 m of low sun that
     leaves one line readable the car crawls on with the path known clear, instead of stopping for good after the
     budget's 2 m. A line found in a frame here and there (a shadow's edge) is no re-acquisition.
     The distance is the speed integrated over time (unknown speed counts as the top speed: the creep ends sooner).
     """
     moved = max(0.0, speed_mps) * max(dt_s, 0.0)
-    spell = rec.guided_since_s is not None and rec.guided_last_s is not None and t_s - rec.guided_last_s <= GUIDE_GAP_S + TIME_EPS_S
+    last = rec.guided_last_s  # set whenever a spell is (guided_since_s)
+    spell = rec.guided_since_s is not None and last is not None and t_s - last <= GUIDE_GAP_S + TIME_EPS_S
     since = rec.guided_since_s if spell else (t_s if guided else None)
-    rec = replace(rec, guided_since_s=since, guided_last_s=t_s if guided else rec.guided_last_s)
+    rec = replace(rec, guided_since_s=since, guided_last_s=t_s if guided else last)
     creeping = rec.creep_since_s is not None
     if lane_reacquired(rec, t_s, cfg):  # a fresh budget from here
         rec = Recovery(creeps=1 if creeping else 0, still_since_s=rec.still_since_s, creep_since_s=t_s if creeping else None,
