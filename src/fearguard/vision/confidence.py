@@ -2,7 +2,9 @@
 
     confidence = mean(support_left, support_right) × geometry × agreement × visibility
 
-A side not found contributes 0 support, so one boundary alone gives at most 0.5. ``geometry`` is 1 when the
+A side not found contributes 0 support, so one boundary alone gives at most 0.5; a side found counts the support its track
+holds (``held``: the best of its last SUPPORT_HOLD_S, so a dashed line does not flicker as its dashes pass) in a clean
+picture, where a weaker line is sparser paint, not paint the noise hid. ``geometry`` is 1 when the
 lane width at the region's middle row and the vanishing point are plausible for a forward camera, falling linearly
 to 0 outside; ``agreement`` (1 without history) compares the detection with the tracked estimate.
 ``visibility`` = (1 − occlusion / OCCLUDED_BLIND) × (1 − clipped share / CLIPPED_BLIND)
@@ -23,6 +25,8 @@ OCCLUDED_BLIND = 0.8  # [-] occlusion at which the visible rest of the markings 
 SNR_ACCEPTABLE = 10.0  # [-] road S/N (mean grey / noise σ) from which the picture counts as fully usable (ISO 12232: "acceptable")
 NOISE_WEIGHT = 0.5  # [-] share of the confidence a picture of pure noise loses by its noise alone (noise blurs what it shows; darkness,
 #                     clipping and garbage hide it, and are counted by the other factors)
+EVIDENCE_SPREAD = 2.0  # [-] standard deviations of a detection's ridge rows about their mean: the span it is seen over (uniform
+#                        rows over a span reach ±1.73 of them)
 AGREEMENT_SCALE = 0.35  # [-] of the lane width: mean disagreement with the track at which agreement reaches 0
 
 
@@ -36,21 +40,32 @@ class LaneEvidence:
     geometry: float
     agreement: float
     visibility: float
+    frame_support: float | None = None  # [0..1] the best side's support in this frame alone (None: the supports above are)
 
     @property
     def guide(self) -> float:
         """How well the best boundary found this frame can steer, whatever the rest of the picture shows: its support ×
         geometry × agreement, the visibility left out. A washed-out or half-hidden picture is not trusted (the confidence
         says so), but a line still found on its readable part, where the track expected it, still says where the lane
-        runs: low sun over a model-car track left the solid left line at support 0.42, agreement 1.00, confidence 0.01."""
-        return _unit(max(self.support_left, self.support_right) * self.geometry * self.agreement)
+        runs: low sun over a model-car track left the solid left line at support 0.42, agreement 1.00, confidence 0.01.
+        The support is this frame's own (not what the track holds), of a side whose track once was a side of a lane seen
+        well (``paired``): a seam or a verge's edge that was never one guides nothing."""
+        best = max(self.support_left, self.support_right) if self.frame_support is None else self.frame_support
+        return _unit(best * self.geometry * self.agreement)
 
 
 def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadRegion, lane_width_px: float) -> float:
-    """1 when the detected boundary lies on the tracked one (mid and bottom rows), 0 at AGREEMENT_SCALE of a lane width apart."""
+    """1 when the detected boundary lies on the tracked one (mid and bottom rows), 0 at AGREEMENT_SCALE of a lane width apart.
+
+    Each row is taken within the span the detection's ridges cover (its rows' mean ± EVIDENCE_SPREAD standard deviations):
+    a line through one far dash is compared where the dash is, not where it is extrapolated to."""
     if measured is None or tracked is None or lane_width_px <= 0:
         return 1.0
-    rows = (0.5 * (region.top_v_px + region.bottom_v_px), region.bottom_v_px)  # the far end swings most in curves
+    rows = (0.5 * (region.top_v_px + region.bottom_v_px), float(region.bottom_v_px))  # the far end swings most in curves
+    if measured.rows is not None:
+        lo = measured.rows.mean_v_px - EVIDENCE_SPREAD * measured.rows.std_v_px
+        hi = measured.rows.mean_v_px + EVIDENCE_SPREAD * measured.rows.std_v_px
+        rows = tuple(min(hi, max(lo, v)) for v in rows)
     err = sum(abs(measured.u_at(v) - tracked.u_at(v)) for v in rows) / len(rows)
     return max(0.0, 1.0 - err / (AGREEMENT_SCALE * lane_width_px))
 
@@ -58,7 +73,8 @@ def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadR
 def lane_confidence(
     left: LaneLine | None, right: LaneLine | None, region: RoadRegion, agreement_left: float = 1.0, agreement_right: float = 1.0,
     occlusion: float = 0.0, clipped_share: float = 0.0, signal_to_noise: float = float("inf"), *, geometry: float | None = None,
-    out_of_view: tuple[bool, bool] = (False, False),
+    out_of_view: tuple[bool, bool] = (False, False), held: tuple[float, float] | None = None,
+    paired: tuple[bool, bool] = (True, True),
 ) -> LaneEvidence:
     """Confidence 0..1 in the ego lane's boundaries, with its factors. ``geometry``: the plausibility of the pair when
     the caller measured it in the ground plane (a bending lane, ``ground_lanes``), instead of the image lines'.
@@ -66,6 +82,11 @@ def lane_confidence(
     is not missing evidence — the seen side's support stands for both."""
     s_l = left.support if left is not None else 0.0
     s_r = right.support if right is not None else 0.0
+    frame_support = max(s_l if paired[0] else 0.0, s_r if paired[1] else 0.0)  # the guide's: this frame's, lane sides only
+    if held is not None:  # the supports the boundaries' tracks hold (a dashed line between two dashes), in a clean picture
+        share = _unit(2.0 * signal_to_noise / SNR_ACCEPTABLE - 1.0)
+        s_l = max(s_l, share * held[0]) if left is not None else s_l
+        s_r = max(s_r, share * held[1]) if right is not None else s_r
     if left is None and out_of_view[0]:
         s_l = s_r
     if right is None and out_of_view[1]:
@@ -76,7 +97,7 @@ def lane_confidence(
     visibility = _unit(1.0 - occlusion / OCCLUDED_BLIND) * _unit(1.0 - clipped_share / CLIPPED_BLIND)
     visibility *= 1.0 - NOISE_WEIGHT * (1.0 - _unit(signal_to_noise / SNR_ACCEPTABLE))
     conf = 0.5 * (s_l + s_r) * geometry * agree * visibility
-    return LaneEvidence(_unit(conf), s_l, s_r, geometry, agree, visibility)
+    return LaneEvidence(_unit(conf), s_l, s_r, geometry, agree, visibility, _unit(frame_support))
 
 
 def _unit(x: float) -> float:

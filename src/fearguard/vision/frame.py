@@ -201,6 +201,8 @@ class Lanes:
     hls_white: np.ndarray | None = None  # the road rows' HLS under white light, when the ground model measured a tinted one
     white: np.ndarray | None = None  # ... its white (edge-line) paint over the road rows (the object search's)
     bend: Bend | None = None  # the boundaries traced round a bend (vision/bend.py): the aim point lies on them
+    held_support: tuple[float, float] | None = None  # the accepted detections' supports as their tracks hold them (lane_tracker)
+    paired: tuple[bool, bool] = (True, True)  # each side's track was once one side of a plausible lane (a line alone guides only then)
 
 
 @dataclass(frozen=True)
@@ -271,6 +273,7 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
     return Lanes(
         left=left, right=right,
         seen_left=det.left if tracked.left_accepted else None, seen_right=det.right if tracked.right_accepted else None,
+        held_support=(tracked.left_support, tracked.right_support), paired=tracked.paired,
         agreement_left=agreement(det.left, tracked.predicted_left, region, width_px),
         agreement_right=agreement(det.right, tracked.predicted_right, region, width_px),
         features=det.features, paint_integral=det.maps.paint_integral, aim_row_px=v_aim, lane_width_px=width_px, bend=bend,
@@ -332,7 +335,8 @@ def judge_confidence(p: Prepared, lanes: Lanes, occlusion_share: float) -> LaneE
     clipped = p.exposure.saturated_share + p.exposure.black_share
     return lane_confidence(lanes.seen_left, lanes.seen_right, p.region, lanes.agreement_left, lanes.agreement_right,
                            occlusion_share, clipped, p.exposure.signal_to_noise,
-                           geometry=lanes.ground.geometry if lanes.ground is not None else None, out_of_view=lanes.out_of_view)
+                           geometry=lanes.ground.geometry if lanes.ground is not None else None, out_of_view=lanes.out_of_view,
+                           held=lanes.held_support, paired=lanes.paired)
 
 
 def read_qr(p: Prepared) -> tuple[str, ...]:

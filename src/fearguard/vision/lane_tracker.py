@@ -7,18 +7,25 @@ in a row, each within ``REINIT_AGREE`` of the one before — which re-initialise
 really moved, e.g. a lane change). Outliers scattered over the image (a shadow edge one frame, a far dash
 the next) are noise and never move a track. A track without detections is predicted for
 ``LOST_AFTER_S`` and then dropped.
+
+A dashed line shows a dash or two at a time: its support (the share of rows with paint) rises and falls as the dashes
+pass. An accepted detection's support is therefore the best its track had over the last ``SUPPORT_HOLD_S`` (one dash
+period at driving speed): a dash between two others is no weaker evidence of the line than they were. A track also
+remembers whether it was ever one side of a lane — accepted together with the other side in a plausible pair
+(``paired``): a line alone that never was (a verge's edge, a seam in worn concrete) guides nothing.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from fearguard.sensors.kalman import kalman_filter
-from fearguard.vision.lanes import LaneLine, RoadRegion
+from fearguard.vision.lanes import LaneLine, RoadRegion, geometry_plausibility
 
 if TYPE_CHECKING:
     from filterpy.kalman import KalmanFilter
@@ -32,6 +39,11 @@ GATE_CHI2 = 13.8  # [-] chi-square, 2 dof, p = 0.001: detections beyond this are
 REINIT_AFTER = 3  # [frames] consecutive outliers that re-initialise the track ...
 REINIT_AGREE = 0.04  # [-] of the width: ... each end point this close to the previous outlier's (they persist)
 LOST_AFTER_S = 1.0  # [s] a track without any detection for this long is dropped
+SUPPORT_HOLD_S = 0.6  # [s] an accepted detection's support is the best of the track's accepted detections this recent: one
+#   period of a dashed line's pattern passing the camera (a model car's 0.15 m dashes, 0.6 m gaps at 1.3 m/s: 0.58 s; a
+#   road's 3 m dashes, 9 m gaps at 25 m/s: 0.48 s), so a dash between two others is no weaker evidence than they were
+PAIRED_MIN_EVIDENCE = 0.5  # [-] mean support × geometry of a pair that was a lane: both sides accepted and seen well together
+#   (two weak lines in worn concrete or a verge's texture that happen to make a plausible pair are no lane)
 DEFAULT_DT_S = 0.05  # [s] used on the first frame and when time does not advance
 
 
@@ -44,6 +56,9 @@ class BoundaryTrack:
         self.last_seen_s = -math.inf
         self.outliers = 0
         self.pending: np.ndarray | None = None  # the last outlier, which the next must agree with to count
+        self.recent: deque[tuple[float, float]] = deque()  # (t_s, support) of the accepted detections of the last SUPPORT_HOLD_S
+        self.paired = False  # accepted together with the other side as a lane (PAIRED_MIN_EVIDENCE), and seen since without a
+        #   gap longer than SUPPORT_HOLD_S
         self._model_dt_s = math.nan  # the period F and Q were built for
         self._F = self._Q = np.eye(4)
 
@@ -79,6 +94,8 @@ class BoundaryTrack:
             return False
         if self.kf is None:
             self.kf, self.last_seen_s, self.outliers, self.pending = self._new_filter(z), t_s, 0, None
+            self.recent.clear()
+            self.paired = False
             return True
         # innovation and its covariance: H picks (u_top, u_bottom), so H·x and H·P·Hᵀ are slices
         y = z - self.kf.x[:2]
@@ -91,10 +108,23 @@ class BoundaryTrack:
                     self.kf = None
                 return False
             self.kf = self._new_filter(z)
+            self.recent.clear()
+            self.paired = False
         else:
             self.kf.update(z, H=self.kf.H)  # H given: z is already the right shape (filterpy skips reshaping it)
+        if t_s - self.last_seen_s > SUPPORT_HOLD_S:
+            self.paired = False  # unseen this long, the track may have drifted onto another line: it is a lane side no more
         self.last_seen_s, self.outliers, self.pending = t_s, 0, None
         return True
+
+    def held_support(self, t_s: float, support: float) -> float:
+        """The support of a detection accepted at t_s: the best of the track's accepted detections within SUPPORT_HOLD_S
+        (this one included). A new track holds nothing from before it."""
+        recent = self.recent
+        while recent and recent[0][0] < t_s - SUPPORT_HOLD_S - 1e-9:  # a frame exactly SUPPORT_HOLD_S old still counts
+            recent.popleft()
+        recent.append((t_s, support))
+        return max(s for _, s in recent)
 
     def line(self, region: RoadRegion) -> LaneLine | None:
         """The tracked boundary as a line in the region (support 0: it is an estimate, not evidence)."""
@@ -129,6 +159,9 @@ class TrackedLanes:
     right_accepted: bool
     predicted_left: LaneLine | None  # the tracks' prediction before this frame's detections
     predicted_right: LaneLine | None
+    left_support: float = 0.0  # [0..1] an accepted detection's support as its track holds it (``held_support``); 0: not accepted
+    right_support: float = 0.0
+    paired: tuple[bool, bool] = (True, True)  # each track was once one side of a plausible lane (``BoundaryTrack.paired``)
 
 
 class LaneTracker:
@@ -152,11 +185,17 @@ class LaneTracker:
             self._tracks = (BoundaryTrack(region.width_px), BoundaryTrack(region.width_px))
         dt = DEFAULT_DT_S if self._last_t_s is None or not t_s > self._last_t_s else min(1.0, t_s - self._last_t_s)
         self._last_t_s = t_s if self._last_t_s is None else max(self._last_t_s, t_s)
-        predicted, accepted = [], []
+        predicted, accepted, held = [], [], []
         for track, line in zip(self._tracks, (left, right), strict=True):
             track.predict(dt)
             predicted.append(track.line(region))
             z = None if line is None else np.array([line.u_at(region.top_v_px), line.u_at(region.bottom_v_px)])
-            accepted.append(track.update(self._last_t_s, z))
+            ok = track.update(self._last_t_s, z)
+            accepted.append(ok)
+            held.append(track.held_support(self._last_t_s, line.support) if ok and line is not None else 0.0)
+        if accepted[0] and accepted[1] and left is not None and right is not None:
+            if 0.5 * (held[0] + held[1]) * geometry_plausibility(left, right, region) >= PAIRED_MIN_EVIDENCE:
+                self._tracks[0].paired = self._tracks[1].paired = True
         lt, rt = (t.line(region) for t in self._tracks)
-        return TrackedLanes(lt, rt, accepted[0], accepted[1], predicted[0], predicted[1])
+        return TrackedLanes(lt, rt, accepted[0], accepted[1], predicted[0], predicted[1], held[0], held[1],
+                            (self._tracks[0].paired, self._tracks[1].paired))

@@ -85,6 +85,25 @@ class RoadRegion:
 
 
 @dataclass(frozen=True)
+class SeenRows:
+    """The image rows a boundary's marking ridges were found on: how many, their mean and their spread. A line through
+    one short dash is known near the dash and barely beyond it (its slope rests on a few rows); a solid line, or dashes
+    far apart, pin it down over the whole region (the tracker weighs each end accordingly: lane_tracker.py)."""
+
+    count: int
+    mean_v_px: float
+    std_v_px: float
+
+    @staticmethod
+    def of(rows: np.ndarray) -> SeenRows | None:
+        """The spread of a set of rows; None for fewer than two (no direction)."""
+        if len(rows) < 2:
+            return None
+        v = rows.astype(np.float64)
+        return SeenRows(len(v), float(v.mean()), float(v.std()))
+
+
+@dataclass(frozen=True)
 class LaneLine:
     """One boundary as u = slope·v + intercept in working pixels, with the evidence behind it."""
 
@@ -92,6 +111,7 @@ class LaneLine:
     intercept_px: float
     support: float  # [0..1] share of the region's rows with a marking ridge on the line, saturating (ridges.SUPPORT_FULL)
     segments: int  # Hough segments that built it
+    rows: SeenRows | None = None  # where on the line the ridges were found (None: not measured, read as the whole region)
 
     def u_at(self, v_px: float) -> float:
         return self.slope * v_px + self.intercept_px
@@ -394,9 +414,9 @@ def lane_width_rows(rows: np.ndarray, priors: tuple[LaneLine | None, LaneLine | 
 
 def ridge_lines(
     maps: RidgeMaps, region: RoadRegion, fits: list[tuple[float, float]], lane_width: np.ndarray, right_sides: list[bool]
-) -> list[tuple[tuple[float, float], float]]:
-    """Each Hough fit refitted on the inner edges of the marking ridges along it, and its support (ridges.py); all
-    fits scanned in one pass."""
+) -> list[tuple[tuple[float, float], float, SeenRows | None]]:
+    """Each Hough fit refitted on the inner edges of the marking ridges along it, its support (ridges.py) and the rows
+    the ridges lie on; all fits scanned in one pass."""
     if not fits:
         return []
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
@@ -408,13 +428,13 @@ def ridge_lines(
             refit = _weighted_fit(rows[ok].astype(np.float64), inner[ok], np.ones(int(ok.sum())))
             if refit is not None and abs(refit[0] - fit[0]) < REFIT_MAX_SLOPE_CHANGE:
                 fit = refit
-        out.append((fit, float(support)))
+        out.append((fit, float(support), SeenRows.of(rows[ok])))
     return out
 
 
 def _scan_sides(
     maps: RidgeMaps, region: RoadRegion, per_side: list[list[tuple[float, float]]], lane_width: np.ndarray
-) -> list[list[tuple[tuple[float, float], float]]]:
+) -> list[list[tuple[tuple[float, float], float, SeenRows | None]]]:
     """``ridge_lines`` of the left and the right candidates in one pass (the cost is mostly per array operation),
     split back by side."""
     left, right = per_side
@@ -483,10 +503,10 @@ def detect_lanes(
         scanned = [a + b for a, b in zip(scanned, more, strict=True)]
     found: list[list[LaneLine]] = [[], []]
     for i, results in enumerate(scanned):
-        for (a, b), support in results:
+        for (a, b), support, seen_rows in results:
             support *= plain
             if support > 0:
-                found[i].append(LaneLine(a, b, support, len(sides[i])))
+                found[i].append(LaneLine(a, b, support, len(sides[i]), seen_rows))
             if support >= PREFER_SHARE and len(found[i]) == 1:
                 break  # ... in preference order: a well-supported preferred line cannot be beaten clearly
     left, right = best_pair(found[0], found[1], region)

@@ -94,7 +94,9 @@ class PassThroughLanes:
         return None, None
 
     def update(self, t_s: float, region: RoadRegion, left: LaneLine | None, right: LaneLine | None) -> TrackedLanes:
-        return TrackedLanes(left=left, right=right, left_accepted=True, right_accepted=True, predicted_left=None, predicted_right=None)
+        return TrackedLanes(left=left, right=right, left_accepted=True, right_accepted=True, predicted_left=None, predicted_right=None,
+                            left_support=left.support if left is not None else 0.0,
+                            right_support=right.support if right is not None else 0.0)
 
 
 class PassThroughLead:
