@@ -54,3 +54,21 @@ def test_through_the_grace_and_the_emergency_the_car_never_takes_the_doubtful_an
         assert math.isclose(cmd.steering_deg, calm, abs_tol=1e-9), cmd.reasons
         if cmd.mode is not fg.Mode.EMERGENCY and not math.isclose(calm, doubtful):
             assert any("holding the steering of the last calm picture" in r for r in cmd.reasons), cmd.reasons
+
+
+@given(calm=st.floats(-10.0, 10.0), odd=st.floats(-20.0, 20.0), seed_frames=st.integers(3, 10))
+def test_one_odd_calm_frame_amid_a_flicker_is_not_what_the_grace_holds(calm: float, odd: float, seed_frames: int) -> None:
+    """The held angle is the median of the last calm pictures' (``supervisor.CALM_MEMORY``): found on pale dashed paint
+    (benchmarks/scenarios_open/pale_dashes, seed 9), where one calm frame between two doubtful ones steered -7.9 deg on a
+    gentle arc and the grace held it until the car left the lane."""
+    guard = fg.FearGuard(lambda frame: 0.0, vehicle=fg.VehicleLimits.preset("model_car"))
+    t = 0.0
+    for _ in range(seed_frames):
+        _step(guard, t, 0.95, calm)
+        t += 0.1
+    _step(guard, t, 0.0, calm)  # a doubtful frame ...
+    t += 0.1
+    _step(guard, t, 0.95, odd)  # ... one calm frame with an odd angle (steered as it says: it is calm) ...
+    t += 0.1
+    cmd = _step(guard, t, 0.0, odd)  # ... doubt again: the calm pictures' median is held, not the odd frame's angle
+    assert math.isclose(cmd.steering_deg, calm, abs_tol=1e-9), cmd.reasons

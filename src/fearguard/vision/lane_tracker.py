@@ -11,7 +11,7 @@ the next) are noise and never move a track. A track without detections is predic
 A dashed line shows a dash or two at a time: its support (the share of rows with paint) rises and falls as the dashes
 pass. An accepted detection's support is therefore the best its track had over the last ``SUPPORT_HOLD_S`` (one dash
 period at driving speed): a dash between two others is no weaker evidence of the line than they were. A track also
-remembers whether it was ever one side of a lane — accepted together with the other side in a plausible pair
+remembers whether it was ever one side of a lane — accepted together with the other side in a pair seen well
 (``paired``): a line alone that never was (a verge's edge, a seam in worn concrete) guides nothing.
 """
 
@@ -57,8 +57,7 @@ class BoundaryTrack:
         self.outliers = 0
         self.pending: np.ndarray | None = None  # the last outlier, which the next must agree with to count
         self.recent: deque[tuple[float, float]] = deque()  # (t_s, support) of the accepted detections of the last SUPPORT_HOLD_S
-        self.paired = False  # accepted together with the other side as a lane (PAIRED_MIN_EVIDENCE), and seen since without a
-        #   gap longer than SUPPORT_HOLD_S
+        self.paired = False  # accepted, since the track began, together with the other side as a lane (PAIRED_MIN_EVIDENCE)
         self._model_dt_s = math.nan  # the period F and Q were built for
         self._F = self._Q = np.eye(4)
 
@@ -112,8 +111,6 @@ class BoundaryTrack:
             self.paired = False
         else:
             self.kf.update(z, H=self.kf.H)  # H given: z is already the right shape (filterpy skips reshaping it)
-        if t_s - self.last_seen_s > SUPPORT_HOLD_S:
-            self.paired = False  # unseen this long, the track may have drifted onto another line: it is a lane side no more
         self.last_seen_s, self.outliers, self.pending = t_s, 0, None
         return True
 
