@@ -104,8 +104,7 @@ class _State:
     mode: ModeState = field(default_factory=ModeState)
     last_t_s: float | None = None
     limit_mps: float | None = None
-    trusted_steering_deg: float = 0.0  # the steering of the last calm pictures (their median), held when the road is lost
-    calm_steering: deque[float] = field(default_factory=lambda: deque(maxlen=CALM_MEMORY))  # ... the last CALM_MEMORY of them
+    calm_steering: deque[float] = field(default_factory=lambda: deque(maxlen=CALM_MEMORY))  # the last calm pictures' steering
     out_steering_deg: float | None = None  # last steering answered (the rate limit starts from it)
     estimator_distrusted: bool = False  # the last lane check overrode the wrapped steering
     recovery: Recovery = field(default_factory=Recovery)
@@ -114,6 +113,11 @@ class _State:
     raw_steering: deque[float] = field(default_factory=deque)  # the last oscillation_flips + 1 wrapped angles
     periods_s: deque[float] = field(default_factory=lambda: deque(maxlen=PERIOD_MEMORY))
     ranges: deque[tuple[float, float]] = field(default_factory=lambda: deque(maxlen=RANGE_MEMORY))
+
+    @property
+    def trusted_steering_deg(self) -> float:
+        """The steering held when the road picture is lost: the median of the last calm pictures' (0 before any)."""
+        return statistics.median(self.calm_steering) if self.calm_steering else 0.0
 
 
 class FearGuard:
@@ -338,7 +342,6 @@ class FearGuard:
             st.recovery = Recovery()  # a new EMERGENCY starts with the full re-acquisition budget
             if road_calm:
                 st.calm_steering.append(wanted)  # the road picture is calm: remember its steering (held if it is lost)
-                st.trusted_steering_deg = statistics.median(st.calm_steering)
             elif not choice.caution:
                 wanted, why = doubt_step(result.cause_fears[Cause.ROAD], wanted, st.trusted_steering_deg, cfg)
                 reasons.extend([why] if why else [])

@@ -202,7 +202,7 @@ class Lanes:
     white: np.ndarray | None = None  # ... its white (edge-line) paint over the road rows (the object search's)
     bend: Bend | None = None  # the boundaries traced round a bend (vision/bend.py): the aim point lies on them
     held_support: tuple[float, float] | None = None  # the accepted detections' supports as their tracks hold them (lane_tracker)
-    paired: tuple[bool, bool] = (True, True)  # each side's track was once one side of a plausible lane (a line alone guides only then)
+    paired: tuple[bool, bool] = (True, True)  # each side's track was once one side of a lane seen well (a line alone guides only then)
 
 
 @dataclass(frozen=True)

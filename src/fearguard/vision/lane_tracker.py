@@ -71,6 +71,12 @@ class BoundaryTrack:
         kf.P = np.diag([r, r, (VELOCITY_STD * self.width_px) ** 2, (VELOCITY_STD * self.width_px) ** 2])
         return kf
 
+    def _begin(self, z: np.ndarray) -> None:
+        """A new track at detection z: nothing held, no lane side yet."""
+        self.kf = self._new_filter(z)
+        self.recent.clear()
+        self.paired = False
+
     def predict(self, dt_s: float) -> None:
         if self.kf is None:
             return
@@ -92,9 +98,8 @@ class BoundaryTrack:
                 self.kf = None
             return False
         if self.kf is None:
-            self.kf, self.last_seen_s, self.outliers, self.pending = self._new_filter(z), t_s, 0, None
-            self.recent.clear()
-            self.paired = False
+            self._begin(z)
+            self.last_seen_s, self.outliers, self.pending = t_s, 0, None
             return True
         # innovation and its covariance: H picks (u_top, u_bottom), so H·x and H·P·Hᵀ are slices
         y = z - self.kf.x[:2]
@@ -106,9 +111,7 @@ class BoundaryTrack:
                 if t_s - self.last_seen_s > LOST_AFTER_S:
                     self.kf = None
                 return False
-            self.kf = self._new_filter(z)
-            self.recent.clear()
-            self.paired = False
+            self._begin(z)
         else:
             self.kf.update(z, H=self.kf.H)  # H given: z is already the right shape (filterpy skips reshaping it)
         self.last_seen_s, self.outliers, self.pending = t_s, 0, None
@@ -158,7 +161,7 @@ class TrackedLanes:
     predicted_right: LaneLine | None
     left_support: float = 0.0  # [0..1] an accepted detection's support as its track holds it (``held_support``); 0: not accepted
     right_support: float = 0.0
-    paired: tuple[bool, bool] = (True, True)  # each track was once one side of a plausible lane (``BoundaryTrack.paired``)
+    paired: tuple[bool, bool] = (True, True)  # each track was once one side of a lane seen well (``BoundaryTrack.paired``)
 
 
 class LaneTracker:

@@ -88,7 +88,8 @@ class RoadRegion:
 class SeenRows:
     """The image rows a boundary's marking ridges were found on: how many, their mean and their spread. A line through
     one short dash is known near the dash and barely beyond it (its slope rests on a few rows); a solid line, or dashes
-    far apart, pin it down over the whole region (the tracker weighs each end accordingly: lane_tracker.py)."""
+    far apart, pin it down over the whole region (a detection is compared with its track within these rows:
+    confidence.agreement)."""
 
     count: int
     mean_v_px: float
@@ -97,10 +98,11 @@ class SeenRows:
     @staticmethod
     def of(rows: np.ndarray) -> SeenRows | None:
         """The spread of a set of rows; None for fewer than two (no direction)."""
-        if len(rows) < 2:
+        n = len(rows)
+        if n < 2:
             return None
-        v = rows.astype(np.float64)
-        return SeenRows(len(v), float(v.mean()), float(v.std()))
+        mean = float(rows.sum()) / n  # sums and a dot product: a quarter of mean() and std()'s cost, for every candidate line
+        return SeenRows(n, mean, math.sqrt(max(0.0, float(rows @ rows) / n - mean * mean)))
 
 
 @dataclass(frozen=True)
