@@ -140,7 +140,7 @@ class Perception:
         reasons: list[str] = []  # alerts
         facts: list[str] = []
         box = obs.lead_box if isinstance(obs.lead_box, LeadBox) else None
-        analysis = self._vision(obs.frame, t, box, reasons, facts)
+        analysis = self._vision(obs.frame, t, box, reasons, facts, reading(obs.speed_mps))
         seen = analysis if analysis is not None else _UNSEEN
         t1 = clock()
         lead = obs.lead if isinstance(obs.lead, Lead) else seen.lead
@@ -195,8 +195,10 @@ class Perception:
         return geometry, steering
 
     # -- camera ---------------------------------------------------------------------------------
-    def _vision(self, frame: object, t: float, box: LeadBox | None, reasons: list[str], facts: list[str]) -> FrameAnalysis | None:
-        """This frame's analysis by the pipeline, or None when there was nothing to analyse (the cues are unknown)."""
+    def _vision(self, frame: object, t: float, box: LeadBox | None, reasons: list[str], facts: list[str],
+                speed_mps: float | None = None) -> FrameAnalysis | None:
+        """This frame's analysis by the pipeline (``speed_mps``: the car's own, None if unknown), or None when there was
+        nothing to analyse (the cues are unknown)."""
         if frame is None:
             reasons.append("camera: no frame: vision cues unknown (worst)")
             return None
@@ -208,7 +210,7 @@ class Perception:
             facts.append(f"camera: no new frame (same content for {same_s:.2f} s): last analysis reused")
             return self._last_analysis
         try:
-            analysis = self.pipeline.process(frame, t if math.isfinite(t) else None, box, scan_qr=self.scan_qr)
+            analysis = self.pipeline.process(frame, t if math.isfinite(t) else None, box, scan_qr=self.scan_qr, speed_mps=speed_mps)
         except Exception as exc:  # vision is a measurement: its failure is an unknown, not a crash
             reasons.append(f"camera: analysis failed ({type(exc).__name__}: {exc}): vision cues unknown (worst)")
             self._last_analysis = None

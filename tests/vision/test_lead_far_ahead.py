@@ -50,9 +50,9 @@ def _underside(cam: CameraModel, radius_m: float, s_m: float, lateral_m: float, 
 
 
 def with_vehicle(img: np.ndarray, cam: CameraModel, radius_m: float, s_m: float, lateral_m: float, width_m: float,
-                 body: tuple[int, int, int]) -> np.ndarray:
+                 body: tuple[int, int, int], lamps: tuple[int, int, int] = (20, 20, 215)) -> np.ndarray:
     """The picture with a vehicle's rear drawn onto it: underside shadow, body (0.35-1.5 m), its rear window of dark
-    glass (1.0-1.4 m), two tail lights."""
+    glass (1.0-1.4 m), two tail lights of colour ``lamps`` (BGR; red by default)."""
     out = img.copy()
 
     def fill(poly: np.ndarray, colour: tuple[int, int, int]) -> None:
@@ -63,7 +63,7 @@ def with_vehicle(img: np.ndarray, cam: CameraModel, radius_m: float, s_m: float,
     fill(_rear_corners(cam, radius_m, s_m, lateral_m, width_m, 0.35, 1.5), body)
     fill(_rear_corners(cam, radius_m, s_m, lateral_m, width_m, 1.0, 1.4, -0.4, 0.4), (45, 40, 38))
     for a, b in ((-0.48, -0.3), (0.3, 0.48)):
-        fill(_rear_corners(cam, radius_m, s_m, lateral_m, width_m, 0.8, 1.0, a, b), (20, 20, 215))
+        fill(_rear_corners(cam, radius_m, s_m, lateral_m, width_m, 0.8, 1.0, a, b), lamps)
     return out
 
 

@@ -141,9 +141,13 @@ class FramePipeline:
         self._frames = 0
 
     def process(
-        self, frame: object, t_s: float | None = None, lead_box: LeadBox | None = None, *, scan_qr: bool = False
+        self, frame: object, t_s: float | None = None, lead_box: LeadBox | None = None, *, scan_qr: bool = False,
+        speed_mps: float | None = None,
     ) -> FrameAnalysis:
         """Analyse one frame at time t_s (None: the frame count × the period).
+
+        ``speed_mps``: the car's own speed, when known: a vehicle without visible tail lights is told from a shadow by
+        moving along the road (vision/lead.py); None: only vehicles with tail lights are boxed.
 
         ``scan_qr``: look for QR boards — on every QR_EVERY_N_FRAMES-th frame analysed (the caller that
         needs payloads, perception on a car with QR localisation, asks; the steering alone does not).
@@ -151,7 +155,7 @@ class FramePipeline:
         self._frames += 1
         t = t_s if t_s is not None and math.isfinite(t_s) else self._frames * self.period_s
         qr = scan_qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
-        return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr, ground=self._ground)
+        return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr, ground=self._ground, speed_mps=speed_mps)
 
 
 def analyze_frame(frame_bgr: object, camera: CameraModel | None = None) -> FrameAnalysis:
@@ -287,8 +291,10 @@ def _bend_polylines(bend: Bend, rows: np.ndarray) -> tuple[np.ndarray | None, np
     return tuple(None if side is None else np.column_stack([bend.u_at(side, v), v]) for side in (bend.left, bend.right))
 
 
-def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: float, given: LeadBox | None) -> LeadAndOcclusion:
-    """The lead box (a usable ``given`` one from an external detector, else detected and tracked) and the occlusion."""
+def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: float, given: LeadBox | None,
+                            speed_mps: float | None = None) -> LeadAndOcclusion:
+    """The lead box (a usable ``given`` one from an external detector, else detected and tracked — ``speed_mps``, the car's
+    own, confirms a lamp-less box that moves along the road) and the occlusion."""
     hls = lanes.hls_white if lanes.hls_white is not None else p.hls  # colours as under white light
     expected_l, expected_r = default_lines(p.region)
     expected_l, expected_r = lanes.left or expected_l, lanes.right or expected_r
@@ -297,7 +303,15 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     box = external
     if external is None:
         found = detect_lead(p.gray, hls, p.region, expected_l, expected_r, reference, p.bgr)
-        box = trackers.leads.update(t_s, found.scaled(p.scale) if found is not None else None)
+        expected = (expected_l, expected_r)
+        if found is not None and not found.lit and lanes.bend is not None and not _in_bent_lane(lanes.bend, found.box, *expected):
+            found = None  # a lamp-less box beside the traced bend: on a bend the straight lines take in the outer lanes far ahead
+        if found is None:
+            box = trackers.leads.update(t_s, None)
+        else:
+            seen_box = found.box.scaled(p.scale)
+            box = trackers.leads.update(t_s, seen_box, lit=found.lit, range_m=lead_from_box(seen_box, p.camera).range_m,
+                                        speed_mps=speed_mps)
     boxes = (box.scaled(1.0 / p.scale).as_int(),) if box is not None else ()
     surface = surface_maps(p.gray, hls, lanes.features, p.region, lanes.paint_integral)
     measured = road_appearance(p.gray, hls, p.region, expected_l, expected_r, surface, interior=lanes.interior)
@@ -317,6 +331,16 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     lead = lead_from_box(box, p.camera) if box is not None else None
     return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference, obstacle=obstacle, searched_m=searched_m,
                             stop_line_m=stop_line_m)
+
+
+def _in_bent_lane(bend: Bend, box: LeadBox, left: LaneLine, right: LaneLine) -> bool:
+    """Whether a box's bottom centre (working pixels) lies in the lane as the traced bend has it: between its curves, or
+    within half the straight lines' lane width of the one curve traced."""
+    u, v = box.x_px + 0.5 * box.w_px, box.y_px + box.h_px - 1
+    half = 0.5 * float(right.u_at(v) - left.u_at(v))
+    lo = bend.u_at(bend.left, v) if bend.left is not None else bend.u_at(bend.right, v) - 2 * half
+    hi = bend.u_at(bend.right, v) if bend.right is not None else lo + 2 * half
+    return bool(lo <= u <= hi)
 
 
 SEARCH_DEPTH_MAX_M = 50.0  # [m] the object search vouches for no more than this (a far row's pixels are a few centimetres of
@@ -361,7 +385,7 @@ def steer(p: Prepared, lanes: Lanes, trackers: Trackers, ground: GroundLaneSpec 
 
 def _analyze(
     frame: object, camera: CameraModel | None, trackers: Trackers, t_s: float, lead_box: LeadBox | None, *, qr: bool,
-    ground: GroundLaneSpec | None = None,
+    ground: GroundLaneSpec | None = None, speed_mps: float | None = None,
 ) -> FrameAnalysis:
     """The stages in order, each timed."""
     bad = invalid_frame_reason(frame)
@@ -373,7 +397,7 @@ def _analyze(
     t1 = clock()
     lanes = find_lanes(p, trackers, t_s, ground)
     t2 = clock()
-    seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box)
+    seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box, speed_mps)
     t3 = clock()
     evidence = judge_confidence(p, lanes, seen.occlusion)
     confidence = trackers.confidence.update(evidence.confidence)

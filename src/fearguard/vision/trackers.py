@@ -36,7 +36,8 @@ class LaneTracking(Protocol):
 
 
 class LeadTracking(Protocol):
-    def update(self, t_s: float, box: LeadBox | None) -> LeadBox | None: ...
+    def update(self, t_s: float, box: LeadBox | None, *, lit: bool = True, range_m: float | None = None,
+               speed_mps: float | None = None) -> LeadBox | None: ...
 
 
 class SteeringMemory(Protocol):
@@ -100,10 +101,11 @@ class PassThroughLanes:
 
 
 class PassThroughLead:
-    """No lead track: this frame's box (or None) as it is."""
+    """No lead track: this frame's box with tail lights (or None) as it is; a lamp-less one needs a track to be seen moving."""
 
-    def update(self, t_s: float, box: LeadBox | None) -> LeadBox | None:
-        return box
+    def update(self, t_s: float, box: LeadBox | None, *, lit: bool = True, range_m: float | None = None,
+               speed_mps: float | None = None) -> LeadBox | None:
+        return box if lit else None
 
 
 class PassThroughMemory:
