@@ -303,8 +303,8 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     box = external
     if external is None:
         found = detect_lead(p.gray, hls, p.region, expected_l, expected_r, reference, p.bgr)
-        expected = (expected_l, expected_r)
-        if found is not None and not found.lit and lanes.bend is not None and not _in_bent_lane(lanes.bend, found.box, *expected):
+        if found is not None and not found.lit and lanes.bend is not None and not _in_bent_lane(lanes.bend, found.box, expected_l,
+                                                                                                 expected_r):
             found = None  # a lamp-less box beside the traced bend: on a bend the straight lines take in the outer lanes far ahead
         if found is None:
             box = trackers.leads.update(t_s, None)

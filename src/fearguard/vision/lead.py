@@ -209,15 +209,18 @@ class LeadTracker:
         return True
 
     def _seen(self, range_m: float | None, speed_mps: float | None, width_px: float) -> None:
-        """A detection joined the track: remember its range and judge, once, whether the track moves along the road."""
+        """A detection joined the track: remember its range and judge, once, whether the track moves along the road (a
+        track that has shown tail lights, or already moves, needs no judging)."""
         t = self.last_t_s
         self.last_seen_s = t
-        if range_m is None or speed_mps is None or not (math.isfinite(range_m) and math.isfinite(speed_mps) and range_m > 0):
+        if self.hits > 0 or self.moving or range_m is None or speed_mps is None:
+            return
+        if not (math.isfinite(range_m) and math.isfinite(speed_mps) and range_m > 0):
             return
         self.samples.append((t, range_m, speed_mps, width_px))
         while self.samples and t - self.samples[0][0] > MOTION_WINDOW_S:
             self.samples.popleft()
-        if not self.moving and len(self.samples) >= MOTION_MIN_SAMPLES and t - self.samples[0][0] >= 0.8 * MOTION_WINDOW_S:  # most of it
+        if len(self.samples) >= MOTION_MIN_SAMPLES and t - self.samples[0][0] >= 0.8 * MOTION_WINDOW_S:  # most of it
             self.moving = moving_over_ground(np.array(self.samples))
 
     def _outlier(self, z: np.ndarray) -> bool:
