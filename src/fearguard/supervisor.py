@@ -475,6 +475,9 @@ class FearGuard:
         if not math.isfinite(range_m):
             st.ranges.clear()
             return None
+        shift = perceived.range_shift_m if perceived is not None else 0.0
+        if shift < 0.0:  # the camera now ranges the same object better: the earlier ranges were that much too far
+            st.ranges = deque(((ts, r + shift) for ts, r in st.ranges), maxlen=RANGE_MEMORY)
         st.ranges.append((t, range_m))
         given = finite_reading(getattr(obs, "range_rate_mps", None))
         estimate = perceived.range_estimate if perceived is not None else None
