@@ -41,7 +41,7 @@ FROZEN_S = 0.5  # [s] frames byte-identical for longer than this: the camera fro
 ULTRASONIC_CONE_DEG = 15.0  # [deg] a lead within ±half this bearing is what the ultrasonic sees
 SAME_RANGE_SHARE = 0.5  # [-] a vehicle box at least this share of the object search's range (and as far to the side) ranges
 #   the object the search found: the search's lowest foreign rows can sit well above the road (MetaDrive seed 23 with
-#   traffic 0.15: a car read 19.2 m by the search, 13.8 m by its box, 13.6 m true), never below half the range
+#   traffic 0.15: a car read 19.2 m by the search, 13.8 m by its box, 12.1 m true), never below half the range
 _NAN = math.nan
 _UNSEEN = FrameAnalysis(lane_confidence=_NAN, brightness=_NAN, occlusion=_NAN, lead=None, qr_payloads=(), steering_deg=None)
 
