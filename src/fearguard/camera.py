@@ -97,6 +97,17 @@ class CameraModel:
             return None
         return self.mount_height_m / math.tan(angle)
 
+    def ground_row_px(self, range_m: float) -> float | None:
+        """Image row of the ground straight ahead ``range_m`` from the camera (``ground_range_m``'s inverse; it may lie
+        outside the image); None without a mount height or for a range the camera cannot face (≤ 0, not finite, or so
+        near below a camera pitched up that it lies behind the image plane)."""
+        if self.mount_height_m is None or not (0.0 < range_m < math.inf):
+            return None
+        below_axis = math.atan2(self.mount_height_m, range_m) - math.radians(self.pitch_deg)
+        if below_axis >= 0.5 * math.pi - 1e-6:
+            return None  # nearer than the ground straight below the lens' plane: behind the image plane
+        return self.cy_px + self.fy_px * math.tan(below_axis)
+
     def range_ahead_m(self, v_px: float) -> float | None:
         """Distance from the vehicle's front to the ground point seen at image row v: the ground range less
         ``front_offset_m``, never below 0 (None as ``ground_range_m``). The range of an object standing on that row."""

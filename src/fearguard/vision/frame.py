@@ -116,10 +116,11 @@ class FramePipeline:
 
     def __init__(
         self, camera: CameraModel | None = None, fps: float = 20.0, *, trackers: Callable[[], Trackers] = Trackers.tracking,
-        ground: GroundLaneSpec | None = None,
+        ground: GroundLaneSpec | None = None, aim_m: float | None = None,
     ) -> None:
         self._camera = camera
         self._ground = ground if camera is not None and camera.mount_height_m is not None else None
+        self._aim_m = aim_m if camera is not None and camera.mount_height_m is not None else None
         self.period_s = 1.0 / fps if fps > 0 else 0.05
         self._new_trackers = trackers
         self.trackers = trackers()
@@ -129,6 +130,12 @@ class FramePipeline:
     def ground(self) -> GroundLaneSpec | None:
         """The road the bending ground-plane lane model is fitted for (None: straight image lines)."""
         return self._ground
+
+    @property
+    def aim_m(self) -> float | None:
+        """How far ahead of the camera the steering aims (None: ``steering.LOOKAHEAD`` of the road region; a camera
+        without a mount height cannot place a distance)."""
+        return self._aim_m
 
     @property
     def camera(self) -> CameraModel | None:
@@ -155,7 +162,8 @@ class FramePipeline:
         self._frames += 1
         t = t_s if t_s is not None and math.isfinite(t_s) else self._frames * self.period_s
         qr = scan_qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
-        return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr, ground=self._ground, speed_mps=speed_mps)
+        return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr, ground=self._ground, speed_mps=speed_mps,
+                        aim_m=self._aim_m)
 
 
 def analyze_frame(frame_bgr: object, camera: CameraModel | None = None) -> FrameAnalysis:
@@ -238,15 +246,16 @@ def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
                     exposure=road_exposure(gray[band], mask[band]), work=work)
 
 
-def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSpec | None = None) -> Lanes:
+def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSpec | None = None, aim_m: float | None = None) -> Lanes:
     """Detect both boundaries (the tracks as priors), remember the lane width, fold the detections into the tracks.
-    With a ground spec: the bending ground-plane model, its boundaries drawn into the image as their near chords."""
+    With a ground spec: the bending ground-plane model, its boundaries drawn into the image as their near chords.
+    ``aim_m``: the steering aims at the lane centre this far ahead of a mounted camera (``steering.lookahead_row``)."""
     region = p.region
+    v_aim = lookahead_row(region, p.camera, aim_m)
     if ground is not None:
         fit = ground_lanes_in_image(p.hls, p.mask, region, p.camera, ground, trackers.ground.priors(t_s), p.work)
         if fit is not None:
             trackers.ground.remember(t_s, fit.lanes)
-            v_aim = lookahead_row(region)
             width_px = trackers.memory.remember_width(fit.left, fit.right, v_aim, region.width_px)
             return Lanes(left=fit.left, right=fit.right, seen_left=fit.left, seen_right=fit.right, agreement_left=fit.agreement[0],
                          agreement_right=fit.agreement[1], features=fit.features, paint_integral=fit.paint_integral, aim_row_px=v_aim,
@@ -255,7 +264,6 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
     shift = far_shift_px(trackers.memory.far_centre_u_px, region)
     mask = region_toward(region, shift) if shift else p.mask  # the far edge where last frame's lane went
     det = detect_lanes(p.hls, region, mask, trackers.lanes.current(region))
-    v_aim = lookahead_row(region)
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
     tracked = trackers.lanes.update(t_s, region, det.left, det.right)
     left = det.left if tracked.left is None or det.left is None else _with_track(det.left, tracked.left)
@@ -385,7 +393,7 @@ def steer(p: Prepared, lanes: Lanes, trackers: Trackers, ground: GroundLaneSpec 
 
 def _analyze(
     frame: object, camera: CameraModel | None, trackers: Trackers, t_s: float, lead_box: LeadBox | None, *, qr: bool,
-    ground: GroundLaneSpec | None = None, speed_mps: float | None = None,
+    ground: GroundLaneSpec | None = None, speed_mps: float | None = None, aim_m: float | None = None,
 ) -> FrameAnalysis:
     """The stages in order, each timed."""
     bad = invalid_frame_reason(frame)
@@ -395,7 +403,7 @@ def _analyze(
     t0 = clock()
     p = prepare(frame, camera)
     t1 = clock()
-    lanes = find_lanes(p, trackers, t_s, ground)
+    lanes = find_lanes(p, trackers, t_s, ground, aim_m)
     t2 = clock()
     seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box, speed_mps)
     t3 = clock()

@@ -16,12 +16,17 @@ from fearguard.vision.ground_lanes import GroundLaneSpec
 class HoughLaneSteering:
     """Stateful steering function: frame (BGR uint8) → steering angle in degrees (+ = left).
 
+    ``aim_m``: the angle is the bearing of the lane centre this far ahead of the camera (a camera with a mount height;
+    default: ``steering.LOOKAHEAD`` of the road region) — pure pursuit's look-ahead: nearer follows a curve more
+    closely (``worlds/metadrive/preset.aim_distance_m``).
+
     No lane in view: the previous angle is kept (0 before any lane was seen); the supervisor's
     lane_confidence will be low at the same time, so it slows or stops the car.
     """
 
-    def __init__(self, camera: CameraModel | None = None, fps: float = 20.0, *, ground: GroundLaneSpec | None = None) -> None:
-        self._pipeline = FramePipeline(camera, fps, ground=ground)
+    def __init__(self, camera: CameraModel | None = None, fps: float = 20.0, *, ground: GroundLaneSpec | None = None,
+                 aim_m: float | None = None) -> None:
+        self._pipeline = FramePipeline(camera, fps, ground=ground, aim_m=aim_m)
 
     @property
     def pipeline(self) -> FramePipeline:

@@ -1,6 +1,8 @@
 """Baseline steering from the lane geometry: the aim point, its bearing, and the lane memory between frames.
 
-The lane centre at a look-ahead row (``LOOKAHEAD`` of the road region from its top) is the aim point;
+The lane centre at a look-ahead row (``LOOKAHEAD`` of the road region from its top, or — a mounted camera given an
+aim distance — the row of the ground that far ahead: pure pursuit's look-ahead, which sets how closely a curve is
+followed) is the aim point;
 the steering angle is its bearing through the camera model (deg, + = left): the direction a
 pure-pursuit driver would head for. One boundary: the centre is half the remembered lane width from
 it. No boundary: the previous angle is kept (the review's rule); without history there is no angle.
@@ -8,6 +10,7 @@ it. No boundary: the previous angle is kept (the review's rule); without history
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from fearguard.camera import CameraModel
@@ -18,7 +21,13 @@ DEFAULT_LANE_WIDTH = 0.45  # [-] of the image width: lane width at the look-ahea
 WIDTH_MEMORY = 0.1  # [-] EMA weight of a new lane-width measurement
 
 
-def lookahead_row(region: RoadRegion) -> float:
+def lookahead_row(region: RoadRegion, camera: CameraModel | None = None, aim_m: float | None = None) -> float:
+    """The row (working pixels) the steering aims at: the ground ``aim_m`` ahead of a mounted ``camera`` (any size: it
+    is scaled to the region's), held inside the road region; else ``LOOKAHEAD`` of the region from its top."""
+    if camera is not None and aim_m is not None:
+        row = camera.scaled_to(region.width_px, region.height_px).ground_row_px(aim_m)
+        if row is not None and math.isfinite(row):
+            return min(max(row, float(region.top_v_px)), float(region.bottom_v_px))
     return region.top_v_px + LOOKAHEAD * (region.bottom_v_px - region.top_v_px)
 
 

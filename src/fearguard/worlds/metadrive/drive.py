@@ -1,7 +1,8 @@
 """One closed-loop drive in MetaDrive: the car's camera → fearguard → the car, measured by the simulator's truth.
 
 The one driver loop drives it (``drive.loop.run``): ``MetaDriveWorld`` is the world, the controller one of
-- ``guarded``: ``FearGuard(HoughLaneSteering(camera))`` with the road-car rules and MetaDrive's car limits; the car
+- ``guarded``: ``FearGuard(HoughLaneSteering(camera, aim_m=...))`` (aiming ``preset.aim_distance_m(cruise)`` ahead)
+  with the road-car rules and MetaDrive's car limits; the car
   drives min(cruise, speed limit) along the pure-pursuit arc to the commanded aim-point bearing (``drive.controllers``);
 - ``unguarded``: the same lane steering alone at cruise (a fault keeps the last angle);
 - ``expert``: MetaDrive's own IDM policy (lane keeping on the map's lanes, car following, lane changes) at the same
@@ -32,7 +33,7 @@ from fearguard.outputs.report import json_value
 from fearguard.supervisor import FearGuard
 from fearguard.vision.lane_steering import HoughLaneSteering
 from fearguard.worlds.metadrive.metrics import stopped_car_outcome, summarize_drive, supervisor_times
-from fearguard.worlds.metadrive.preset import CAR_LENGTH_M, CRUISE_MPS, STEP_S, metadrive_limits
+from fearguard.worlds.metadrive.preset import CAR_LENGTH_M, CRUISE_MPS, STEP_S, aim_distance_m, metadrive_limits
 from fearguard.worlds.metadrive.world import DEFAULT_MAP, MetaDriveWorld, Scenario, require_positive
 
 CONTROLLERS = ("guarded", "unguarded", "expert")
@@ -114,10 +115,11 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None, on_step: Cal
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
     began = time.perf_counter()
-    world = MetaDriveWorld(o.scenario(), seconds=o.seconds)
+    aim = aim_distance_m(o.cruise_mps)
+    world = MetaDriveWorld(o.scenario(), seconds=o.seconds, aim_m=aim)
     open_s = time.perf_counter() - began
     limits = metadrive_limits(radar=o.range_sensor == "radar", aim_m=world.aim_m)
-    lanes = HoughLaneSteering(camera=world.camera, fps=world.fps)
+    lanes = HoughLaneSteering(camera=world.camera, fps=world.fps, aim_m=aim)
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
     guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=world.camera) if o.controller == "guarded" else None
     controller = controller_for(o, world, guard, lanes, limits.max_steering_deg)

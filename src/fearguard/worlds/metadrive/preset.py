@@ -60,8 +60,12 @@ SPEED_GAIN = 0.5  # [1/(m/s)] throttle per m/s of speed error: full throttle / b
 ROLLING_THROTTLE = 0.2  # [-] added while driving: MetaDrive keeps a brake of 2 on every wheel under throttle (its
 #   _apply_throttle_brake), so a small throttle does not start the car (0.1-0.4 left it standing for 0.7 s)
 HOLD_BELOW_MPS = 0.3  # [m/s] a target at or below this is "stand still": full brake
-AIM_M = 12.0  # [m] from the camera: the distance of the steering's aim point, the ground range of the image lane
-#   model's look-ahead row (vision/steering.py LOOKAHEAD of the road region below the horizon; lane_aim_m() computes it)
+AIM_M = 12.0  # [m] from the camera: the aim point's distance when the camera cannot place one (no road region row)
+AIM_TIME_S = 0.9  # [s] pure pursuit's look-ahead at cruise: the aim point this far ahead in time (aim_distance_m). Pure
+#   pursuit cuts into a curve and swings out of it, more the farther it aims: on MetaDrive's tightest curves (R 25 m) a
+#   kinematic pursuit at 10 m/s leaves the centre by 1.3 m aiming 16 m ahead (the image model's own look-ahead row at
+#   320x240: seed 24 at traffic 0.15 side-swiped a car in the next lane so), by 0.4 m aiming 9 m ahead
+AIM_MIN_M = 8.0  # [m] the nearest aim point: slower cruises aim here (the road's lines stay long enough in view to fit)
 CRUISE_MPS = 10.0  # [m/s] the default cruise (36 km/h): MetaDrive's traffic drives at 30 km/h (IDMPolicy.NORMAL_SPEED)
 
 # -- radar-like range sensor (from the simulator's truth) ------------------------------------------------------
@@ -83,7 +87,7 @@ def steering_wheelbase_m(aim_m: float = AIM_M) -> float:
 
     The car drives the pure-pursuit arc from its rear axle through the aim point, ``aim_m`` from the camera, the
     camera REAR_AXLE_TO_CAMERA_M ahead of the axle: κ = 2·aim·sin α / ((d + aim·cos α)² + (aim·sin α)²), so for small
-    α, tan α / κ = (d + aim)² / (2·aim): 10.4 m at the 16 m aim of a 320×240 frame. With the car's own 2.469 m a 9.7°
+    α, tan α / κ = (d + aim)² / (2·aim): 7.0 m at the 9 m aim of the 10 m/s cruise (10.4 m at 16 m). With the car's own 2.469 m a 9.7°
     bearing (a 64 m arc) would read as a 14.5 m turn and cap the car at 6.6 m/s on a gentle curve (measured: seed 0,
     14.7 of 30 s under that cap, progress 79 % of the expert's).
     """
@@ -94,7 +98,7 @@ def metadrive_limits(*, radar: bool = False, aim_m: float = AIM_M) -> VehicleLim
     """MetaDrive's default car: the ``road_car`` preset where the two agree, MetaDrive's numbers where they differ.
 
     - ``max_speed_mps`` 22.2 (MetaDrive: no engine force above 80 km/h; road_car: 30);
-    - ``wheelbase_m``: ``steering_wheelbase_m(aim_m)`` (~10.4 m), the wheelbase for which the steering angle — an
+    - ``wheelbase_m``: ``steering_wheelbase_m(aim_m)`` (7.0 m at the 9 m aim), the wheelbase for which the steering angle — an
       aim-point bearing, not a wheel angle — gives the true curvature (the car's own is WHEELBASE_M, 2.469 m, which
       the actuation uses); ``width_m`` 1.852 (DefaultVehicle; road_car: 1.8);
     - ``max_steering_deg`` 30: the aim-point bearing, not the wheel angle (the lane model's bearings stay well inside);
@@ -106,13 +110,20 @@ def metadrive_limits(*, radar: bool = False, aim_m: float = AIM_M) -> VehicleLim
                    ultrasonic_max_range_m=RADAR_MAX_RANGE_M)
 
 
-def lane_aim_m(camera: CameraModel) -> float:
-    """Ground distance from the camera to the image lane model's aim row (the look-ahead row of its road region)."""
+def aim_distance_m(cruise_mps: float) -> float:
+    """The lane steering's aim distance for a cruise speed: AIM_TIME_S ahead, at least AIM_MIN_M (``HoughLaneSteering(
+    camera, aim_m=...)``; ``lane_aim_m`` gives the distance the camera's road region can hold)."""
+    return max(AIM_MIN_M, AIM_TIME_S * cruise_mps)
+
+
+def lane_aim_m(camera: CameraModel, aim_m: float | None = None) -> float:
+    """Ground distance from the camera to the image lane model's aim row: the row of ``aim_m`` held inside the road
+    region (None: the look-ahead row of the region, ~16 m at 320x240), as ``HoughLaneSteering(camera, aim_m=aim_m)`` aims."""
     from fearguard.vision.lanes import road_region
     from fearguard.vision.steering import lookahead_row
 
     region = road_region(camera.width_px, camera.height_px, camera)
-    distance = camera.ground_range_m(lookahead_row(region))
+    distance = camera.ground_range_m(lookahead_row(region, camera, aim_m))
     return distance if distance is not None else AIM_M
 
 

@@ -168,18 +168,20 @@ class MetaDriveWorld:
 
     ``seconds`` bounds the drive (``sense`` returns None after it); MetaDrive ending the episode (a crash, off the
     road, arrived) ends it too (``Outcome.done``). ``samples`` holds the truth after every step, ``sim_ms`` the
-    simulator's time per step (physics + rendering), for the metrics and the cost table.
+    simulator's time per step (physics + rendering), for the metrics and the cost table. ``aim_m``: how far ahead the
+    controller's lane steering aims (the same value its ``HoughLaneSteering`` was given; None: its default row), the
+    distance ``act`` turns an aim-point bearing into the pure-pursuit arc with.
     """
 
     fps: float = FRAME_RATE_HZ
 
-    def __init__(self, scenario: Scenario, seconds: float = math.inf) -> None:
+    def __init__(self, scenario: Scenario, seconds: float = math.inf, aim_m: float | None = None) -> None:
         simulator()
         from metadrive.envs.metadrive_env import MetaDriveEnv
 
         self.scenario = s = scenario
         self.camera: CameraModel = metadrive_camera(s.width_px, s.height_px)
-        self.aim_m = lane_aim_m(self.camera)
+        self.aim_m = lane_aim_m(self.camera, aim_m)  # the lane steering's aim point: give it the same aim_m
         self.total = math.ceil(seconds * FRAME_RATE_HZ) if math.isfinite(seconds) else None  # steps; None: until MetaDrive ends
         self.env = MetaDriveEnv(_config(s))
         try:
