@@ -18,7 +18,7 @@ class HoughLaneSteering:
 
     ``aim_m``: the angle is the bearing of the lane centre this far ahead of the camera (a camera with a mount height;
     default: ``steering.LOOKAHEAD`` of the road region) — pure pursuit's look-ahead: nearer follows a curve more
-    closely (``worlds/metadrive/preset.aim_distance_m``).
+    closely (``worlds/metadrive/preset.AIM_M``).
 
     No lane in view: the previous angle is kept (0 before any lane was seen); the supervisor's
     lane_confidence will be low at the same time, so it slows or stops the car.

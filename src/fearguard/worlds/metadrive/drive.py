@@ -1,8 +1,8 @@
 """One closed-loop drive in MetaDrive: the car's camera → fearguard → the car, measured by the simulator's truth.
 
 The one driver loop drives it (``drive.loop.run``): ``MetaDriveWorld`` is the world, the controller one of
-- ``guarded``: ``FearGuard(HoughLaneSteering(camera, aim_m=...))`` (aiming ``preset.aim_distance_m(cruise)`` ahead)
-  with the road-car rules and MetaDrive's car limits; the car
+- ``guarded``: ``FearGuard(HoughLaneSteering(camera, aim_m=AIM_M))`` (aiming 9 m ahead: ``preset.AIM_M``) with the
+  road-car rules and MetaDrive's car limits; the car
   drives min(cruise, speed limit) along the pure-pursuit arc to the commanded aim-point bearing (``drive.controllers``);
 - ``unguarded``: the same lane steering alone at cruise (a fault keeps the last angle);
 - ``expert``: MetaDrive's own IDM policy (lane keeping on the map's lanes, car following, lane changes) at the same
@@ -33,7 +33,7 @@ from fearguard.outputs.report import json_value
 from fearguard.supervisor import FearGuard
 from fearguard.vision.lane_steering import HoughLaneSteering
 from fearguard.worlds.metadrive.metrics import stopped_car_outcome, summarize_drive, supervisor_times
-from fearguard.worlds.metadrive.preset import CAR_LENGTH_M, CRUISE_MPS, STEP_S, aim_distance_m, metadrive_limits
+from fearguard.worlds.metadrive.preset import AIM_M, CAR_LENGTH_M, CRUISE_MPS, STEP_S, metadrive_limits
 from fearguard.worlds.metadrive.world import DEFAULT_MAP, MetaDriveWorld, Scenario, require_positive
 
 CONTROLLERS = ("guarded", "unguarded", "expert")
@@ -115,11 +115,10 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None, on_step: Cal
     if out is not None:
         out.mkdir(parents=True, exist_ok=True)
     began = time.perf_counter()
-    aim = aim_distance_m(o.cruise_mps)
-    world = MetaDriveWorld(o.scenario(), seconds=o.seconds, aim_m=aim)
+    world = MetaDriveWorld(o.scenario(), seconds=o.seconds, aim_m=AIM_M)
     open_s = time.perf_counter() - began
     limits = metadrive_limits(radar=o.range_sensor == "radar", aim_m=world.aim_m)
-    lanes = HoughLaneSteering(camera=world.camera, fps=world.fps, aim_m=aim)
+    lanes = HoughLaneSteering(camera=world.camera, fps=world.fps, aim_m=AIM_M)
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
     guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=world.camera) if o.controller == "guarded" else None
     controller = controller_for(o, world, guard, lanes, limits.max_steering_deg)

@@ -60,12 +60,13 @@ SPEED_GAIN = 0.5  # [1/(m/s)] throttle per m/s of speed error: full throttle / b
 ROLLING_THROTTLE = 0.2  # [-] added while driving: MetaDrive keeps a brake of 2 on every wheel under throttle (its
 #   _apply_throttle_brake), so a small throttle does not start the car (0.1-0.4 left it standing for 0.7 s)
 HOLD_BELOW_MPS = 0.3  # [m/s] a target at or below this is "stand still": full brake
-AIM_M = 12.0  # [m] from the camera: the aim point's distance when the camera cannot place one (no road region row)
-AIM_TIME_S = 0.9  # [s] pure pursuit's look-ahead at cruise: the aim point this far ahead in time (aim_distance_m). Pure
-#   pursuit cuts into a curve and swings out of it, more the farther it aims: on MetaDrive's tightest curves (R 25 m) a
-#   kinematic pursuit at 10 m/s leaves the centre by 1.3 m aiming 16 m ahead (the image model's own look-ahead row at
-#   320x240: seed 24 at traffic 0.15 side-swiped a car in the next lane so), by 0.4 m aiming 9 m ahead
-AIM_MIN_M = 8.0  # [m] the nearest aim point: slower cruises aim here (the road's lines stay long enough in view to fit)
+AIM_M = 9.0  # [m] from the camera: the lane steering's aim point (``HoughLaneSteering(camera, aim_m=AIM_M)``). Pure
+#   pursuit cuts into a curve and swings out of it, more the farther it aims: on MetaDrive's tightest curves (R 25 m,
+#   driven at <= 8.7 m/s under road_car's 3 m/s² lateral cap whatever the cruise) a kinematic pursuit leaves the lane
+#   centre by 1.3 m aiming 16 m ahead (the image model's own look-ahead row at 320x240: seed 24 at traffic 0.15
+#   side-swiped a car in the next lane so), by 0.4 m aiming 9 m ahead. One distance for every cruise: 0.9 s at 10 m/s
+#   tracks without weaving at 20 m/s (seed 0: offset max 0.23 m), and 0.9 s of a 15 m/s cruise (13.5 m) swung seed 1
+#   out of its R 25 m curve into the next lane's car where 9 m kept it within 0.63 m
 CRUISE_MPS = 10.0  # [m/s] the default cruise (36 km/h): MetaDrive's traffic drives at 30 km/h (IDMPolicy.NORMAL_SPEED)
 
 # -- radar-like range sensor (from the simulator's truth) ------------------------------------------------------
@@ -87,7 +88,7 @@ def steering_wheelbase_m(aim_m: float = AIM_M) -> float:
 
     The car drives the pure-pursuit arc from its rear axle through the aim point, ``aim_m`` from the camera, the
     camera REAR_AXLE_TO_CAMERA_M ahead of the axle: κ = 2·aim·sin α / ((d + aim·cos α)² + (aim·sin α)²), so for small
-    α, tan α / κ = (d + aim)² / (2·aim): 7.0 m at the 9 m aim of the 10 m/s cruise (10.4 m at 16 m). With the car's own 2.469 m a 9.7°
+    α, tan α / κ = (d + aim)² / (2·aim): 7.0 m at the 9 m aim (10.4 m at 16 m). With the car's own 2.469 m a 9.7°
     bearing (a 64 m arc) would read as a 14.5 m turn and cap the car at 6.6 m/s on a gentle curve (measured: seed 0,
     14.7 of 30 s under that cap, progress 79 % of the expert's).
     """
@@ -110,15 +111,10 @@ def metadrive_limits(*, radar: bool = False, aim_m: float = AIM_M) -> VehicleLim
                    ultrasonic_max_range_m=RADAR_MAX_RANGE_M)
 
 
-def aim_distance_m(cruise_mps: float) -> float:
-    """The lane steering's aim distance for a cruise speed: AIM_TIME_S ahead, at least AIM_MIN_M (``HoughLaneSteering(
-    camera, aim_m=...)``; ``lane_aim_m`` gives the distance the camera's road region can hold)."""
-    return max(AIM_MIN_M, AIM_TIME_S * cruise_mps)
-
-
-def lane_aim_m(camera: CameraModel, aim_m: float | None = None) -> float:
+def lane_aim_m(camera: CameraModel, aim_m: float | None = AIM_M) -> float:
     """Ground distance from the camera to the image lane model's aim row: the row of ``aim_m`` held inside the road
-    region (None: the look-ahead row of the region, ~16 m at 320x240), as ``HoughLaneSteering(camera, aim_m=aim_m)`` aims."""
+    region (9 m at every MetaDrive resolution; None: the region's own look-ahead row, ~16 m at 320x240), as
+    ``HoughLaneSteering(camera, aim_m=aim_m)`` aims."""
     from fearguard.vision.lanes import road_region
     from fearguard.vision.steering import lookahead_row
 

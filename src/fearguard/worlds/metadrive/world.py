@@ -35,6 +35,7 @@ from fearguard.supervisor import Observation
 from fearguard.worlds.metadrive.headless import ENGINE_SETTINGS, MIN_CAMERA_PX, after_reset, repair_child_environment, simulator
 from fearguard.worlds.metadrive.metrics import Sample
 from fearguard.worlds.metadrive.preset import (
+    AIM_M,
     CAR_LENGTH_M,
     CAR_WIDTH_M,
     DECISION_REPEAT,
@@ -169,13 +170,14 @@ class MetaDriveWorld:
     ``seconds`` bounds the drive (``sense`` returns None after it); MetaDrive ending the episode (a crash, off the
     road, arrived) ends it too (``Outcome.done``). ``samples`` holds the truth after every step, ``sim_ms`` the
     simulator's time per step (physics + rendering), for the metrics and the cost table. ``aim_m``: how far ahead the
-    controller's lane steering aims (the same value its ``HoughLaneSteering`` was given; None: its default row), the
+    controller's lane steering aims (the value its ``HoughLaneSteering`` was given: the preset's 9 m; None: the road
+    region's own row), the
     distance ``act`` turns an aim-point bearing into the pure-pursuit arc with.
     """
 
     fps: float = FRAME_RATE_HZ
 
-    def __init__(self, scenario: Scenario, seconds: float = math.inf, aim_m: float | None = None) -> None:
+    def __init__(self, scenario: Scenario, seconds: float = math.inf, aim_m: float | None = AIM_M) -> None:
         simulator()
         from metadrive.envs.metadrive_env import MetaDriveEnv
 
