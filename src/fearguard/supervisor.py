@@ -47,6 +47,7 @@ from fearguard.policy import (
     rate_limited_steering_deg,
     recovery_eligible,
     recovery_status,
+    same_object_after_gap,
     watchdog_s,
 )
 from fearguard.policy.decision import (
@@ -113,6 +114,7 @@ class _State:
     raw_steering: deque[float] = field(default_factory=deque)  # the last oscillation_flips + 1 wrapped angles
     periods_s: deque[float] = field(default_factory=lambda: deque(maxlen=PERIOD_MEMORY))
     ranges: deque[tuple[float, float]] = field(default_factory=lambda: deque(maxlen=RANGE_MEMORY))
+    range_missed: bool = False  # frames without a range since the last one (policy.speed.same_object_after_gap)
 
     @property
     def trusted_steering_deg(self) -> float:
@@ -469,12 +471,17 @@ class FearGuard:
         """How fast the obstacle comes closer (m/s, + = closing): given, from the range filter, or from successive ranges.
 
         None when unknown (the envelope then treats the obstacle as standing). Never more opening than the
-        vehicle's closing-speed bound: a garbage rate cannot buy a larger envelope.
+        vehicle's closing-speed bound: a garbage rate cannot buy a larger envelope. A frame without a range (a camera's
+        box lost for a frame) does not forget the object: the next reading continues its ranges if it is the same
+        object (``same_object_after_gap``).
         """
         st, bound = self._state, self.vehicle.max_closing_speed_mps
         if not math.isfinite(range_m):
-            st.ranges.clear()
+            st.range_missed = True  # nothing ahead this frame: the ranges before age out of the closing window by themselves
             return None
+        if st.range_missed and st.ranges and not same_object_after_gap(st.ranges[-1], t, range_m):
+            st.ranges.clear()  # another object, or the same one gone longer than the window: its speed is unknown
+        st.range_missed = False
         shift = perceived.range_shift_m if perceived is not None else 0.0
         if shift < 0.0:  # the camera now ranges the same object better: the earlier ranges were that much too far
             st.ranges = deque(((ts, r + shift) for ts, r in st.ranges), maxlen=RANGE_MEMORY)

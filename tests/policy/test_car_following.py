@@ -118,3 +118,44 @@ def test_ranges_all_at_one_instant_give_no_closing_speed() -> None:
     from fearguard.policy import closing_speed_from_ranges
 
     assert closing_speed_from_ranges([(1.0, 5.0), (1.0, 4.0)], 1.0) is None
+
+
+def _follow_with_dropouts(ranges_m: list[float], ego_mps: float, dt: float = 0.1) -> list[fg.Command]:
+    """A camera-only road car (no range sensor) at a steady speed, fed the camera's range each frame (inf: the box lost)."""
+    car = fg.VehicleLimits.preset("road_car")
+    car = fg.VehicleLimits(**{**car.__dict__, "has_ultrasonic": False})
+    guard = fg.FearGuard(lambda f: 0.0, rules=RULES, vehicle=car)
+    return [guard.step(fg.Observation(t_s=round(k * dt, 6), speed_mps=ego_mps, cues=fg.Cues(0.9, 120.0, 0.0, r, 0.0)))
+            for k, r in enumerate(ranges_m)]
+
+
+def test_a_car_followed_at_its_speed_is_not_forgotten_when_its_box_is_lost_for_a_frame() -> None:
+    """MetaDrive seed 29 (traffic 0.1): a car followed at its own 7.7 m/s on a curve, 16 m ahead, its box lost for one
+    frame; the next range had no history, read as a standing car 16 m ahead, and the car made an EMERGENCY STOP and
+    lost 8 s. The range after a frame without one continues the object's ranges when it is the same object."""
+    ranges = [16.0 + 0.1 * math.sin(k) for k in range(60)]
+    for k in (20, 35, 36, 50):  # one frame lost, two lost, one lost
+        ranges[k] = math.inf
+    cmds = _follow_with_dropouts(ranges, 7.7)
+    assert all(c.mode is not fg.Mode.EMERGENCY for c in cmds)
+    assert all(math.isfinite(cmds[k].closing_speed_mps) for k in (21, 37, 51))  # the speed is still known
+    assert min(c.speed_limit_mps for c in cmds[25:]) > 5.0
+
+
+@pytest.mark.parametrize("gap_frames", [1, 2])
+def test_after_a_lost_frame_a_nearer_object_is_a_new_one_of_unknown_speed(gap_frames: int) -> None:
+    """The range jumps from a car followed 30 m ahead to 12 m across frames without a range: another object (a car
+    cutting in), its speed unknown, so it counts as standing — as a first reading always did."""
+    ranges = [30.0] * 20 + [math.inf] * gap_frames + [12.0] * 5
+    cmds = _follow_with_dropouts(ranges, 10.0)
+    assert math.isnan(cmds[20 + gap_frames].closing_speed_mps)
+
+
+def test_a_range_after_a_gap_longer_than_the_closing_window_starts_afresh() -> None:
+    from fearguard.policy import CLOSING_WINDOW_S, same_object_after_gap
+
+    assert same_object_after_gap((1.0, 16.0), 1.2, 16.4)
+    assert not same_object_after_gap((1.0, 16.0), 1.0 + CLOSING_WINDOW_S + 0.05, 16.0)  # gone too long
+    assert not same_object_after_gap((1.0, 16.0), 1.1, 12.0)  # another object
+    assert same_object_after_gap((1.0, 40.0), 1.1, 36.5) and not same_object_after_gap((1.0, 40.0), 1.1, 35.5)  # 10 % far out
+    assert not same_object_after_gap((1.0, 16.0), 0.9, 16.0)  # time ran backwards: not the same track

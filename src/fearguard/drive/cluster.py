@@ -24,7 +24,7 @@ import re
 import time
 import uuid
 from collections.abc import Generator, Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import contextmanager, suppress
 from types import ModuleType
 from typing import Any
 
@@ -105,7 +105,9 @@ class DaskExecutor:
                 for future, row in self._completed(distributed, client, futures, stop):
                     yield index[future.key], row
             finally:  # a stop, Ctrl-C, a failed row or the consumer gone: nothing more runs for this plan
-                client.cancel(futures)
+                with suppress(distributed.client.ClosedClientError, OSError, TimeoutError):
+                    client.cancel(futures)  # a client closed under us (its scheduler lost) has nothing left to cancel: the
+                    #   error that says so and how to resume must not be replaced by this one (CI, a loaded machine)
 
     def _completed(self, distributed: ModuleType, client: Any, futures: list[Any],
                    stop: StopSignal | None) -> Iterator[tuple[Any, Row]]:

@@ -45,6 +45,7 @@ from fearguard.policy.speed import (
     oscillating,
     rate_limited_mps,
     rate_limited_steering_deg,
+    same_object_after_gap,
     stopping_distance_m,
     watchdog_s,
 )
@@ -54,5 +55,6 @@ __all__ = [
     "Lead", "Mode", "ModeState", "PolicyConfig", "Recovery", "Strategy", "active_causes", "closing_speed_from_ranges",
     "creep_clearance", "creep_needs_m", "emergency_plan", "envelope_speed_mps", "fear_speed_mps", "imminent_collision",
     "lane_reacquired", "lateral_speed_mps", "lead_speed_mps", "next_mode", "next_recovery", "oscillating", "rate_limited_mps",
-    "rate_limited_steering_deg", "recovery_eligible", "recovery_exhausted", "recovery_status", "stopping_distance_m", "watchdog_s",
+    "rate_limited_steering_deg", "recovery_eligible", "recovery_exhausted", "recovery_status", "same_object_after_gap",
+    "stopping_distance_m", "watchdog_s",
 ]
