@@ -119,8 +119,9 @@ class FramePipeline:
         ground: GroundLaneSpec | None = None, aim_m: float | None = None,
     ) -> None:
         self._camera = camera
-        self._ground = ground if camera is not None and camera.mount_height_m is not None else None
-        self._aim_m = aim_m if camera is not None and camera.mount_height_m is not None else None
+        mounted = camera is not None and camera.mount_height_m is not None  # only a known height places ground distances
+        self._ground = ground if mounted else None
+        self._aim_m = aim_m if mounted else None
         self.period_s = 1.0 / fps if fps > 0 else 0.05
         self._new_trackers = trackers
         self.trackers = trackers()

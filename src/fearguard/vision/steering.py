@@ -10,7 +10,6 @@ it. No boundary: the previous angle is kept (the review's rule); without history
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from fearguard.camera import CameraModel
@@ -26,7 +25,7 @@ def lookahead_row(region: RoadRegion, camera: CameraModel | None = None, aim_m: 
     is scaled to the region's), held inside the road region; else ``LOOKAHEAD`` of the region from its top."""
     if camera is not None and aim_m is not None:
         row = camera.scaled_to(region.width_px, region.height_px).ground_row_px(aim_m)
-        if row is not None and math.isfinite(row):
+        if row is not None:
             return min(max(row, float(region.top_v_px)), float(region.bottom_v_px))
     return region.top_v_px + LOOKAHEAD * (region.bottom_v_px - region.top_v_px)
 

@@ -171,8 +171,7 @@ class MetaDriveWorld:
     road, arrived) ends it too (``Outcome.done``). ``samples`` holds the truth after every step, ``sim_ms`` the
     simulator's time per step (physics + rendering), for the metrics and the cost table. ``aim_m``: how far ahead the
     controller's lane steering aims (the value its ``HoughLaneSteering`` was given: the preset's 9 m; None: the road
-    region's own row), the
-    distance ``act`` turns an aim-point bearing into the pure-pursuit arc with.
+    region's own row), the distance ``act`` turns an aim-point bearing into the pure-pursuit arc with.
     """
 
     fps: float = FRAME_RATE_HZ
