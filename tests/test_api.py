@@ -96,7 +96,7 @@ def test_camera_projection_and_its_inverse_agree(tmp_path: Path) -> None:
 def test_additions_of_issue_32_are_pinned() -> None:
     """A caller that holds the estimator's angle passes it; a detector's box has its own field; ``steer`` may be None."""
     names = [f.name for f in dataclasses.fields(fg.Observation)]
-    assert names[names.index("range_rate_mps") + 1 :] == ["steering_deg", "lead_box"]
+    assert names[names.index("range_rate_mps") + 1 :] == ["steering_deg", "lead_box", "route_steering_deg"]  # + issue 38's route
     box = fg.LeadBox(10.0, 20.0, 30.0, 40.0)
     obs = fg.Observation(t_s=0.0, lead=box)  # the contract's lead= took a box: it keeps working, as lead_box
     assert obs.lead is None and obs.lead_box == box

@@ -61,6 +61,8 @@ class Observation:
     ``steering_deg``: the wrapped estimator's angle when the caller already holds it (a Donkey pilot's, an RL agent's):
     validated exactly like a steering function's answer, and the steering function is not called. ``lead`` is a
     ``Lead``; a detector's box in frame pixels is ``lead_box`` (a ``LeadBox`` given as ``lead`` is moved there).
+    ``route_steering_deg``: the route's steering from a map and localisation (MetaDrive's navigation; a campus car's
+    waypoints), a guide only where the picture is not: docs/rules.md, "Following the route where the markings end".
     """
 
     t_s: float
@@ -77,6 +79,10 @@ class Observation:
     range_rate_mps: float | None = None
     steering_deg: float | None = None  # [deg, + = left] the estimator's angle, when the caller holds it (None: ask ``steer``)
     lead_box: LeadBox | None = None  # a box from an external detector (frame pixels): perception turns it into a Lead
+    # [deg, + = left] the steering that follows the car's route by a map and its localisation (a navigation's), in the
+    # estimator's units, when the caller has one: where the road picture is not trusted and the path is known clear, the
+    # car may follow it (``route_blind_m``) instead of stopping — across a junction whose markings end. None: no route
+    route_steering_deg: float | None = None
 
     def __post_init__(self) -> None:
         if isinstance(self.lead, LeadBox):  # the contract's ``lead=`` took a box too: it keeps working

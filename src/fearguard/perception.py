@@ -32,7 +32,7 @@ from fearguard.track.reading import read_as_learnt
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.frame import FrameAnalysis, FramePipeline
 from fearguard.vision.ground import lane_geometry
-from fearguard.vision.obstacle import Obstacle
+from fearguard.vision.obstacle import Obstacle, RoutePath
 
 FROZEN_S = 0.5  # [s] frames byte-identical for longer than this: the camera froze (a real camera always has noise);
 #                  shorter repeats are a loop faster than the camera (a 5 fps camera in a 20 Hz loop repeats for 0.15 s):
@@ -175,7 +175,7 @@ class Perception:
         reasons: list[str] = []  # alerts
         facts: list[str] = []
         box = obs.lead_box if isinstance(obs.lead_box, LeadBox) else None
-        analysis = self._vision(obs.frame, t, box, reasons, facts, reading(obs.speed_mps))
+        analysis = self._vision(obs.frame, t, box, reasons, facts, reading(obs.speed_mps), self._route_path(obs))
         seen = analysis if analysis is not None else _UNSEEN
         t1 = clock()
         lead = obs.lead if isinstance(obs.lead, Lead) else seen.lead
@@ -230,8 +230,18 @@ class Perception:
         return geometry, steering
 
     # -- camera ---------------------------------------------------------------------------------
+    def _route_path(self, obs: Observation) -> RoutePath | None:
+        """The path the caller's route steers (``Observation.route_steering_deg``, within the steering range; None: no
+        finite route) as the bicycle model the policy uses reads a steering angle: curvature tan(δ) / wheelbase."""
+        route = finite_reading(getattr(obs, "route_steering_deg", None))
+        if route is None:
+            return None
+        v = self.vehicle
+        angle = math.radians(min(max(route, -v.max_steering_deg), v.max_steering_deg))
+        return RoutePath(math.tan(angle) / v.wheelbase_m, v.width_m)
+
     def _vision(self, frame: object, t: float, box: LeadBox | None, reasons: list[str], facts: list[str],
-                speed_mps: float | None = None) -> FrameAnalysis | None:
+                speed_mps: float | None = None, path: RoutePath | None = None) -> FrameAnalysis | None:
         """This frame's analysis by the pipeline (``speed_mps``: the car's own, None if unknown), or None when there was
         nothing to analyse (the cues are unknown)."""
         if frame is None:
@@ -245,7 +255,8 @@ class Perception:
             facts.append(f"camera: no new frame (same content for {same_s:.2f} s): last analysis reused")
             return self._last_analysis
         try:
-            analysis = self.pipeline.process(frame, t if math.isfinite(t) else None, box, scan_qr=self.scan_qr, speed_mps=speed_mps)
+            analysis = self.pipeline.process(frame, t if math.isfinite(t) else None, box, scan_qr=self.scan_qr, speed_mps=speed_mps,
+                                             path=path)
         except Exception as exc:  # vision is a measurement: its failure is an unknown, not a crash
             reasons.append(f"camera: analysis failed ({type(exc).__name__}: {exc}): vision cues unknown (worst)")
             self._last_analysis = None

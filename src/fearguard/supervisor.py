@@ -65,6 +65,7 @@ from fearguard.policy.decision import (
     rule_reasons,
 )
 from fearguard.policy.lane_check import LaneCheck, lane_check
+from fearguard.policy.route import next_route
 from fearguard.policy.stop_line import StopLine, next_stop_line
 from fearguard.readings import finite_reading
 from fearguard.steering_deadline import SteeringDeadline
@@ -115,6 +116,9 @@ class _State:
     periods_s: deque[float] = field(default_factory=lambda: deque(maxlen=PERIOD_MEMORY))
     ranges: deque[tuple[float, float]] = field(default_factory=lambda: deque(maxlen=RANGE_MEMORY))
     range_missed: bool = False  # frames without a range since the last one (policy.speed.same_object_after_gap)
+    routed_m: float = 0.0  # [m] driven by the route since the road picture was last trusted (policy.route)
+    oncoming_t_s: float | None = None  # a vehicle last came toward the car while it followed the route (policy.route)
+    route_noted: bool = False  # a route steering that is no finite number arrived, and the reasons said so
 
     @property
     def trusted_steering_deg(self) -> float:
@@ -295,6 +299,21 @@ class FearGuard:
             return 0.0, f"fault: steering {value:+.1f} deg outside ±{limit:.1f} deg"
         return value, ""
 
+    def _route(self, obs: Observation, notes: list[str]) -> float | None:
+        """The route steering given (None: none), within the steering range; one that is no finite number is no route,
+        and the reasons say so once."""
+        raw = getattr(obs, "route_steering_deg", None)
+        if raw is None:
+            return None
+        value = finite_reading(raw)
+        if value is None:
+            if not self._state.route_noted:
+                self._state.route_noted = True
+                notes.append(f"route_steering_deg {describe(raw)} is not a finite number: no route followed")
+            return None
+        limit = self.vehicle.max_steering_deg
+        return min(max(value, -limit), limit)
+
     def _decide(
         self, obs: Observation, t: float, cues: Cues, result: FearResult, steering: float, notes: list[str],
         lead: Lead | None, perceived: Perceived | None,
@@ -312,23 +331,30 @@ class FearGuard:
         path_doubt = creep_clearance(clear_m, cfg, v)  # "" when the path ahead is known clear for a creep
         # how fast the car goes now: measured, else the limit it was last given (never told to move: standing)
         now_mps = speed if speed is not None else (st.limit_mps if st.limit_mps is not None else 0.0)
-        grace = self._grace_s(over, imminent, cues, path_doubt, now_mps, lead)
+        dt = 0.0 if st.last_t_s is None else t - st.last_t_s
+        road_calm = result.cause_fears[Cause.ROAD] < cfg.caution_fear
+        moving_at = speed - closing if speed is not None and closing is not None and math.isfinite(range_m) else None
+        route = next_route(st.routed_m, self._route(obs, notes), road_calm, clear_m, path_doubt, speed, dt, cfg, v, t_s=t,
+                           object_speed_mps=moving_at, oncoming_t_s=st.oncoming_t_s)
+        st.routed_m, st.oncoming_t_s = route.routed_m, route.oncoming_t_s
+        grace = self._grace_s(over, imminent, cues, path_doubt, now_mps, lead, route.following)
         st.mode, event = next_mode(st.mode, result.fear, t, at_once=imminent, cfg=cfg, cause_fears=result.cause_fears, over=over,
                                    grace_s=grace)
-        dt = 0.0 if st.last_t_s is None else t - st.last_t_s
         fear_limit = fear_speed_mps(result.fear, self.rules.level_anchors, cfg, v)
         envelope = envelope_step(range_m, speed, closing, v)
         cause = self._dominant_cause(result, range_m)
         reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {cause.value}", *moving]
-        road_calm = result.cause_fears[Cause.ROAD] < cfg.caution_fear
         lane_now = perceived.lane_steering_deg if perceived is not None else None
-        check = self._lane_check(perceived, steering, speed_now) if road_calm else None
+        check = self._lane_check(perceived, steering, speed_now, self._route(obs, [])) if road_calm else None
         choice = lane_step(check, st.estimator_distrusted, steering, lane_now, st.trusted_steering_deg, cfg, v)
         st.estimator_distrusted = choice.distrusted
         wanted, strategy = choice.steering_deg, Strategy.PASS_THROUGH
         follow_cap, follow_why = follow_step(range_m, speed, closing, cfg, v)
         reasons.extend([follow_why] if follow_why else [])
         caps = [fear_limit, envelope.speed_mps, choice.cap_mps, follow_cap, self._grace_cap(grace, t, reasons, path_doubt, now_mps)]
+        if route.why and (st.mode.mode is not Mode.EMERGENCY or not route.following):  # in EMERGENCY its plan steers
+            caps.append(route.cap_mps if st.mode.mode is not Mode.EMERGENCY else math.inf)
+            reasons.append(route.why)
         line_m = perceived.stop_line_m if perceived is not None else None
         st.stop_line, line_cap, line_why = next_stop_line(st.stop_line, line_m, speed_now, t, dt, cfg, v, clear_m)
         caps.append(line_cap)
@@ -336,7 +362,8 @@ class FearGuard:
         mode = Mode.CAUTION if choice.caution and st.mode.mode is Mode.NORMAL else st.mode.mode
         reasons.extend([choice.reason] if choice.reason else [])
         if st.mode.mode is Mode.EMERGENCY:
-            plan = self._emergency(result, lead, imminent, path_doubt, cues, perceived, t, dt, speed_now, wanted, steering)
+            plan = self._emergency(result, lead, imminent, path_doubt, cues, perceived, t, dt, speed_now, wanted, steering,
+                                   self._route(obs, []), route.cap_mps if route.following else None)
             strategy, cause, wanted = plan.strategy, plan.cause or cause, plan.steering_deg
             caps.append(plan.cap_mps)
             reasons.extend(plan.reasons)
@@ -344,6 +371,8 @@ class FearGuard:
             st.recovery = Recovery()  # a new EMERGENCY starts with the full re-acquisition budget
             if road_calm:
                 st.calm_steering.append(wanted)  # the road picture is calm: remember its steering (held if it is lost)
+            elif route.steering_deg is not None:
+                wanted = route.steering_deg  # the picture in doubt, the route known: its steering (the reason is the route's)
             elif not choice.caution:
                 wanted, why = doubt_step(result.cause_fears[Cause.ROAD], wanted, st.trusted_steering_deg, cfg)
                 reasons.extend([why] if why else [])
@@ -366,10 +395,13 @@ class FearGuard:
 
     def _emergency(
         self, result: FearResult, lead: Lead | None, imminent: bool, unclear: str, cues: Cues, perceived: Perceived | None,
-        t: float, dt: float, speed_now: float, wanted: float, steering: float,
+        t: float, dt: float, speed_now: float, wanted: float, steering: float, route_deg: float | None = None,
+        route_cap: float | None = None,
     ) -> EmergencyChoice:
         """In EMERGENCY: advance the recovery (a creep after a road-picture stop, when the path ahead is known clear), then
-        the plan of the active causes. ``unclear``: why the path is not known clear for a creep ("" when it is)."""
+        the plan of the active causes. ``unclear``: why the path is not known clear for a creep ("" when it is). A route
+        steering (``route_deg``) steers a creep in place of the wrapped estimator, a creep on it is not blind, and goes at
+        the route's cap (``route_cap``), not at crawl speed."""
         st, cfg, v = self._state, self.rules.policy, self.vehicle
         active = active_causes(result.cause_fears, st.mode, cfg)
         road_stop = recovery_eligible(st.mode, active, lead, imminent)
@@ -377,14 +409,17 @@ class FearGuard:
         seen = confidence is not None and confidence >= cfg.recovery_min_confidence  # a lane this faint steers nothing
         # a boundary found frame after frame steers a creep even when the picture as a whole is not trusted (glare)
         guided = perceived is not None and perceived.lane_guide >= cfg.recovery_min_guide
-        st.recovery, creep = next_recovery(st.recovery, road_stop and not unclear, t, dt, speed_now, cfg, blind=not seen,
-                                           guided=guided)
+        routed = route_deg is not None and cfg.route_blind_m > 0.0 and st.routed_m < cfg.route_blind_m  # its budget shared
+        st.recovery, creep = next_recovery(st.recovery, road_stop and not unclear, t, dt, speed_now, cfg,
+                                           blind=not (seen or routed), guided=guided, routed=routed)
         seen = seen or lane_reacquired(st.recovery, t, cfg)  # the re-acquired lane steers the creep and is no blind stretch
-        plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t)
-        status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=not seen)
+        plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t,
+                              route_cap if routed else None)
+        status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=not (seen or routed))
         lane_now = perceived.lane_steering_deg if perceived is not None and seen else None
-        estimator = None if st.estimator_distrusted else steering
-        return emergency_step(plan, creep, lane_now, wanted, status, estimator, cfg.recovery_creep_max_deg)
+        estimator = route_deg if routed else None if st.estimator_distrusted else steering
+        bound = v.max_steering_deg if routed else cfg.recovery_creep_max_deg  # a route is a known path, not a guess
+        return emergency_step(plan, creep, lane_now, wanted, status, estimator, bound)
 
     def _moving_object(self, cues: Cues, result: FearResult, range_m: float, speed: float | None,
                        closing: float | None) -> tuple[FearResult, tuple[str, ...]]:
@@ -414,6 +449,7 @@ class FearGuard:
 
     def _grace_s(
         self, over: frozenset[Cause], imminent: bool, cues: Cues, path_doubt: str, now_mps: float, lead: Lead | None,
+        routed: bool = False,
     ) -> float:
         """A road picture that flickers is CAUTION, not a string of emergencies (issue 35): entering EMERGENCY for the road
         picture alone, measured, waits ``road_enter_s``. With the path ahead known clear the car may go on at the doubt
@@ -421,16 +457,19 @@ class FearGuard:
         moving gets the wait, and only to slow down (``_grace_cap``): a standing car does not start on a picture in
         doubt. An unknown picture (a lost camera) and one whose brightness alone demands an emergency (black, or
         blinding glare) are no flicker. With a lead to follow there is no wait: following it is the better guide than
-        a picture in doubt."""
+        a picture in doubt. Following the route (``routed``: ``policy.route``, the path known clear), the wait lasts while
+        it does, a lead or not."""
         cfg = self.rules.policy
         measured = all(unknown_note(name, getattr(cues, name)) is None for name in ("lane_confidence", "brightness", "occlusion"))
         following = lead is not None and lead.usable
-        if over != {Cause.ROAD} or imminent or following or not measured:
-            return 0.0
-        if path_doubt and not now_mps > 0.0:
+        if over != {Cause.ROAD} or imminent or not measured:
             return 0.0
         light_alone = replace(Cues(*calm_values(self.rules.brightness_band)), brightness=cues.brightness)
         if self.rules.evaluate(light_alone).fear >= cfg.emergency_enter_fear:
+            return 0.0
+        if routed:  # the route is the better guide than a lead, which may cross the junction elsewhere
+            return math.inf
+        if following or (path_doubt and not now_mps > 0.0):
             return 0.0
         if self._state.stop_line.crossed_m is not None and not path_doubt:
             return math.inf  # crossing after a served stop line: the markings are missing there by design
@@ -445,6 +484,8 @@ class FearGuard:
                 and st.mode.over_since_s is not None):
             return math.inf
         cap = cfg.road_doubt_fraction * self.vehicle.max_speed_mps
+        if math.isinf(grace) and st.stop_line.crossed_m is None:
+            return math.inf  # following the route: its own cap and reason (policy.route)
         if math.isinf(grace):
             reasons.append(f"crossing after a stop line, the markings missing, the path clear as seen at the stop: {cap:.2f} m/s")
             return cap
@@ -496,13 +537,14 @@ class FearGuard:
             closing = closing_speed_from_ranges(st.ranges, t, self.vehicle.lead_max_decel_mps2)
         return None if closing is None else max(closing, -bound)
 
-    def _lane_check(self, perceived: Perceived | None, steering: float, speed_now: float) -> LaneCheck | None:
+    def _lane_check(self, perceived: Perceived | None, steering: float, speed_now: float, route: float | None) -> LaneCheck | None:
         """The lane-keeping plausibility check on this frame's ground-plane lane (perception measures it: frames with a
-        camera model that knows its mounting height only)."""
+        camera model that knows its mounting height only); a departure the route asks for too is intended."""
         if perceived is None or perceived.analysis is None:
             return None
         cfg = self.rules.policy
-        return lane_check(perceived.lane, steering, speed_now, self.vehicle, cfg.lane_check_lookahead_s, cfg.lane_check_min_deg)
+        return lane_check(perceived.lane, steering, speed_now, self.vehicle, cfg.lane_check_lookahead_s, cfg.lane_check_min_deg,
+                          route if cfg.route_blind_m > 0.0 else None)
 
     def _dominant_cause(self, result: FearResult, range_m: float) -> Cause:
         """The cause with the largest fear among those that can apply to this car: a collision needs a range sensor or

@@ -254,6 +254,7 @@ def policy_from_table(src: TomlSource, data: object, key_path: str = "policy") -
         ("road_enter_s", cfg.road_enter_s >= 0.0, "must be >= 0"),
         ("stop_line_wait_s", cfg.stop_line_wait_s >= 0.0, "must be >= 0 (0: stop lines are not stopped for)"),
         ("stop_line_cross_m", cfg.stop_line_cross_m > 0.0, "must be > 0"),
+        ("route_blind_m", cfg.route_blind_m >= 0.0, "must be >= 0 (0: a route is not followed)"),
         ("road_doubt_fraction", 0.0 <= cfg.road_doubt_fraction <= 1.0, "must be in [0, 1]"),
     ):
         if not ok:

@@ -13,6 +13,7 @@ so a cue getting worse can only add caps: the limit never rises when a cue worse
     emergency.py  the plan of each active cause, the re-acquisition creep
     lane_check.py will the wrapped steering cross a lane boundary soon?
     stop_line.py  stand before a stop line, wait, then cross
+    route.py      follow the caller's route where the road picture is lost and the path is known clear
     decision.py   one frame's decision as named steps: speed caps, the steering choice, the explanation
 """
 

@@ -56,6 +56,8 @@ class PolicyConfig:
     recovery_creep_max_deg: float = 6.0  # [deg] a creep steered by the wrapped estimator stays within ± this
     road_enter_s: float = 0.5  # [s] a road-picture-only emergency with the path known clear waits this long, in CAUTION
     road_doubt_fraction: float = 0.4  # [-] of max speed while it waits (a flickering picture: slow down, do not stop)
+    route_blind_m: float = 0.0  # [m] followed by the caller's route steering per loss of the road picture, the path known
+    #   clear, before an emergency (policy.route; 0: a route is not followed)
     stop_line_wait_s: float = 0.0  # [s] standing before a stop line before crossing (0: stop lines are not stopped for)
     stop_line_cross_m: float = 1.0  # [m] after a served stop, lines are not stopped for again within this distance
     oscillation_deg: float = 10.0  # [deg] a steering sign flip between two frames, both beyond this, is large

@@ -112,7 +112,7 @@ def lane_step(check: LaneCheck | None, distrusted: bool, steering_deg: float, la
         source = "steering by the lane geometry seen now" if lane_now_deg is not None else "holding the lane geometry's last"
         why = f"lane check: the estimator steered out of the lane when last checked: {source} {wanted:+.1f} deg"
         return SteeringChoice(wanted, True, cap, why, True)
-    return SteeringChoice(steering_deg, False, math.inf, "", distrusted and check is None)
+    return SteeringChoice(steering_deg, False, math.inf, check.why if check is not None else "", distrusted and check is None)
 
 
 def doubt_step(road_fear: float, wanted_deg: float, trusted_deg: float, cfg: PolicyConfig) -> tuple[float, str]:

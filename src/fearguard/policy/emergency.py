@@ -67,6 +67,7 @@ def emergency_plan(
     vehicle: VehicleLimits,
     creep: str = "",
     t_s: float | None = None,
+    creep_cap_mps: float | None = None,
 ) -> EmergencyPlan:
     """Analyse, then act: every active cause proposes a plan; the one with the lowest cap wins.
 
@@ -74,7 +75,8 @@ def emergency_plan(
     only add causes, so it can only lower the cap: the speed limit stays monotone in every cue.
     ``creep`` (the recovery's reason, empty = none): the road-picture stop becomes a bounded CRAWL to
     re-acquire the road (the supervisor allows it only with the range clear and no fault). ``t_s`` (now) lets
-    a cause kept by the hold say how long is left.
+    a cause kept by the hold say how long is left. ``creep_cap_mps``: a creep on the caller's route goes at the route's
+    own cap (``policy.route``: never faster than the car stops within the path known clear), not at crawl speed.
     """
     active = active_causes(cause_fears, state, cfg)
     stop = EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg, f"fault: stop, holding {held_steering_deg:+.1f} deg")
@@ -93,7 +95,7 @@ def emergency_plan(
             follow = f"{why}: follow the lead at bearing {bearing:+.1f} deg ({gap})"
             plans.append(EmergencyPlan(Strategy.FOLLOW_LEAD, cap, steer, follow, cause))
         elif cause is Cause.ROAD and creep:
-            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap, held_steering_deg,
+            plans.append(EmergencyPlan(Strategy.CRAWL, crawl_cap if creep_cap_mps is None else creep_cap_mps, held_steering_deg,
                                        f"{why}, range clear: {creep}, holding {held_steering_deg:+.1f} deg", cause))
         elif cause is Cause.ROAD:
             plans.append(EmergencyPlan(Strategy.STOP, 0.0, held_steering_deg,
@@ -153,7 +155,7 @@ def creep_clearance(clear_m: float, cfg: PolicyConfig, vehicle: VehicleLimits) -
 
 def next_recovery(
     rec: Recovery, eligible: bool, t_s: float, dt_s: float, speed_mps: float, cfg: PolicyConfig, blind: bool = False,
-    guided: bool = False,
+    guided: bool = False, routed: bool = False,
 ) -> tuple[Recovery, str]:
     """Advance the recovery one frame; returns the new memory and, while creeping, the creep's reason (else "").
 
@@ -171,6 +173,8 @@ def next_recovery(
     leaves one line readable the car crawls on with the path known clear, instead of stopping for good after the
     budget's 2 m. A line found in a frame here and there (a shadow's edge) is no re-acquisition.
     The distance is the speed integrated over time (unknown speed counts as the top speed: the creep ends sooner).
+    A creep steered by the caller's route (``routed``: ``policy.route``; a known path, not a guess) is one creep that goes on
+    until ``route_blind_m`` in all — across the rest of a junction after a stop in it — not a string of car lengths.
     """
     moved = max(0.0, speed_mps) * max(dt_s, 0.0)
     last = rec.guided_last_s  # set whenever a spell is (guided_since_s)
@@ -192,10 +196,14 @@ def next_recovery(
         creep_m, total_m = rec.creep_m + moved, rec.total_m + moved
         done = (creep_m >= cfg.recovery_creep_m or t_s - rec.creep_since_s >= cfg.recovery_creep_s - TIME_EPS_S
                 or total_m >= cfg.recovery_max_total_m or (blind and blind_m >= cfg.recovery_blind_m))
+        if routed:
+            done = total_m >= cfg.route_blind_m
         if eligible and not done:
             why = (f"re-acquisition creep {rec.creeps} of {cfg.recovery_max_creeps} "
                    f"({creep_m:.2f} of {float(cfg.recovery_creep_m):.2f} m, "
                    f"{t_s - rec.creep_since_s:.1f} of {float(cfg.recovery_creep_s):.1f} s)")
+            if routed:
+                why = f"re-acquisition creep on the route ({total_m:.2f} of {float(cfg.route_blind_m):.2f} m)"
             return replace(rec, total_m=total_m, still_since_s=None, creep_m=creep_m, blind_m=blind_m), why
         unused = not eligible and creep_m <= 0.0  # ended before the car moved (the path stopped being known clear): no try spent
         return replace(rec, creeps=rec.creeps - 1 if unused else rec.creeps, total_m=total_m, still_since_s=None,

@@ -9,6 +9,9 @@ tan δ / L (bicycle model): y(x) ≈ x²·tan δ / (2L). At the look-ahead dista
 crossing T, clamped to what the camera sees) the car's side must stay inside the boundaries. Only a
 steering that crosses a boundary *and* points at least ``min_deg`` more toward it than the lane geometry's
 own steering is overridden: the lane geometry is the reference, so its own model errors never trigger it.
+A departure the car's route asks for is intended — a roundabout's exit, a turn off the lane — as lane departure warning
+is silent while the indicator is on (ISO 17361): when the route's own steering crosses the same boundary and the
+estimator steers within ``min_deg`` of it, the estimator is not overridden and the reasons say so.
 """
 
 from __future__ import annotations
@@ -48,9 +51,10 @@ def crossing_side(geometry: LaneGeometry, steering_deg: float, distance_m: float
 
 def lane_check(
     geometry: LaneGeometry | None, steering_deg: float, speed_mps: float, vehicle: VehicleLimits,
-    lookahead_s: float, min_deg: float,
+    lookahead_s: float, min_deg: float, route_deg: float | None = None,
 ) -> LaneCheck | None:
-    """None when nothing can be checked (no lane geometry, no reference steering, not moving)."""
+    """None when nothing can be checked (no lane geometry, no reference steering, not moving). ``route_deg``: the
+    route's steering (``Observation.route_steering_deg``), when the caller has a map."""
     if geometry is None or geometry.steering_deg is None or not math.isfinite(geometry.steering_deg):
         return None
     if not (geometry.far_m > geometry.near_m > 0.0) or speed_mps <= 0.0:
@@ -61,6 +65,9 @@ def lane_check(
     toward = steering_deg - lane if side == "left" else lane - steering_deg
     if not side or toward < min_deg:
         return LaneCheck("", distance, None, "")
+    if route_deg is not None and abs(steering_deg - route_deg) <= min_deg and crossing_side(geometry, route_deg, distance, vehicle) == side:
+        return LaneCheck(side, distance, None, f"lane check: steering {steering_deg:+.1f} deg crosses the {side} boundary within "
+                                               f"{distance:.2f} m as the route does ({route_deg:+.1f} deg): an intended departure")
     why = (f"lane check: steering {steering_deg:+.1f} deg crosses the {side} boundary within {distance:.2f} m "
            f"({lookahead_s:.1f} s ahead), {toward:.1f} deg more toward it than the lane geometry: "
            f"steering by the lane geometry {lane:+.1f} deg")

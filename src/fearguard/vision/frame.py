@@ -44,7 +44,7 @@ from fearguard.vision.lanes import (
     work_size,
 )
 from fearguard.vision.lead import detect_lead, lead_from_box
-from fearguard.vision.obstacle import Obstacle, search_lane
+from fearguard.vision.obstacle import Obstacle, RoutePath, search_lane
 from fearguard.vision.occlusion import default_lines, occlusion, road_appearance, road_reference, surface_maps
 from fearguard.vision.qr import detect_qr
 from fearguard.vision.steering import aim_point_u, lookahead_row, steering_from_aim
@@ -150,12 +150,13 @@ class FramePipeline:
 
     def process(
         self, frame: object, t_s: float | None = None, lead_box: LeadBox | None = None, *, scan_qr: bool = False,
-        speed_mps: float | None = None,
+        speed_mps: float | None = None, path: RoutePath | None = None,
     ) -> FrameAnalysis:
         """Analyse one frame at time t_s (None: the frame count × the period).
 
         ``speed_mps``: the car's own speed, when known: a vehicle without visible tail lights is told from a shadow by
-        moving along the road (vision/lead.py); None: only vehicles with tail lights are boxed.
+        moving along the road (vision/lead.py); None: only vehicles with tail lights are boxed. ``path``: where the
+        car's route steers it (a map's), searched for objects when no lane boundary is seen (vision/obstacle.py).
 
         ``scan_qr``: look for QR boards — on every QR_EVERY_N_FRAMES-th frame analysed (the caller that
         needs payloads, perception on a car with QR localisation, asks; the steering alone does not).
@@ -164,7 +165,7 @@ class FramePipeline:
         t = t_s if t_s is not None and math.isfinite(t_s) else self._frames * self.period_s
         qr = scan_qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
         return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr, ground=self._ground, speed_mps=speed_mps,
-                        aim_m=self._aim_m)
+                        aim_m=self._aim_m, path=path)
 
 
 def analyze_frame(frame_bgr: object, camera: CameraModel | None = None) -> FrameAnalysis:
@@ -301,9 +302,10 @@ def _bend_polylines(bend: Bend, rows: np.ndarray) -> tuple[np.ndarray | None, np
 
 
 def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: float, given: LeadBox | None,
-                            speed_mps: float | None = None) -> LeadAndOcclusion:
+                            speed_mps: float | None = None, path: RoutePath | None = None) -> LeadAndOcclusion:
     """The lead box (a usable ``given`` one from an external detector, else detected and tracked — ``speed_mps``, the car's
-    own, confirms a lamp-less box that moves along the road) and the occlusion."""
+    own, confirms a lamp-less box that moves along the road), the occlusion, and the object search: along the lane seen,
+    or — no boundary seen — along the route's ``path`` when there is one, else the straight lane prior."""
     hls = lanes.hls_white if lanes.hls_white is not None else p.hls  # colours as under white light
     expected_l, expected_r = default_lines(p.region)
     expected_l, expected_r = lanes.left or expected_l, lanes.right or expected_r
@@ -333,8 +335,13 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     # tiled floors it serves a smoother tile is no object
     if p.camera.mount_height_m is not None and (lanes.ground is None or lanes.interior is not None):
         searched_m = search_depth_m(p.camera, p.region, p.scale)
+        bounds = None
+        if path is not None and lanes.left is None and lanes.right is None and lanes.interior is None:
+            aim_v = lanes.aim_row_px * p.scale  # the route's steering aims at this row's ground: beyond it its arc is a guess
+            bounds = path.bounds_px(p.camera, p.region, p.scale, p.camera.ground_range_m(aim_v) or 0.0)
+            searched_m = min(searched_m, p.camera.range_ahead_m(aim_v) or 0.0)
         found_in_lane = search_lane(surface, road, p.region, expected_l, expected_r, p.camera, p.scale, interior=lanes.interior,
-                                    smooth_objects=lanes.ground is None, edge_paint=lanes.white)
+                                    smooth_objects=lanes.ground is None, edge_paint=lanes.white, bounds=bounds)
         obstacle, stop_line_m = found_in_lane.obstacle, found_in_lane.stop_line_m
     obstacle = trackers.obstacles.update(obstacle)
     lead = lead_from_box(box, p.camera) if box is not None else None
@@ -394,7 +401,7 @@ def steer(p: Prepared, lanes: Lanes, trackers: Trackers, ground: GroundLaneSpec 
 
 def _analyze(
     frame: object, camera: CameraModel | None, trackers: Trackers, t_s: float, lead_box: LeadBox | None, *, qr: bool,
-    ground: GroundLaneSpec | None = None, speed_mps: float | None = None, aim_m: float | None = None,
+    ground: GroundLaneSpec | None = None, speed_mps: float | None = None, aim_m: float | None = None, path: RoutePath | None = None,
 ) -> FrameAnalysis:
     """The stages in order, each timed."""
     bad = invalid_frame_reason(frame)
@@ -406,7 +413,7 @@ def _analyze(
     t1 = clock()
     lanes = find_lanes(p, trackers, t_s, ground, aim_m)
     t2 = clock()
-    seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box, speed_mps)
+    seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box, speed_mps, path)
     t3 = clock()
     evidence = judge_confidence(p, lanes, seen.occlusion)
     confidence = trackers.confidence.update(evidence.confidence)

@@ -54,6 +54,41 @@ BAND_DEPTH = 1.0  # [-] ... and no deeper on the ground than this × the interio
 #   line, a crossing's edge), not an object: anything standing projects far deeper onto the ground plane than it is wide
 
 
+PATH_CAR_WIDTHS = 1.25  # [-] a route's path is searched this many car widths wide (after the INSET): its swept path with an
+#   eighth of a car width to spare each side
+
+
+@dataclass(frozen=True)
+class RoutePath:
+    """Where a route steers the car, for the object search when no lane boundary is seen: the arc of curvature
+    ``curvature_per_m`` (+ = left) from the camera, tangent to its heading, searched PATH_CAR_WIDTHS × ``width_m`` wide.
+
+    Without it the search looks along the straight lane prior (``lanes.default_lines``): turning into a roundabout on
+    its route (MetaDrive), the car read the central island straight ahead as an object in its path at 10.9 m and stopped
+    in the roundabout's mouth."""
+
+    curvature_per_m: float
+    width_m: float
+
+    def bounds_px(self, camera: CameraModel, region: RoadRegion, scale: float, reach_m: float = math.inf) -> tuple[np.ndarray, np.ndarray]:
+        """Per road row of the working image: the (left, right) columns of a lane whose interior (INSET of its width
+        inside each side) is the path; NaN on rows whose ground lies beyond ``reach_m`` from the camera (how far the route's
+        steering is known to hold: its aim point; past it a roundabout's S-bend leaves the arc), beyond a half turn, or in
+        the sky."""
+        rows = np.arange(region.top_v_px, region.bottom_v_px + 1, dtype=np.float64)
+        x = np.array([camera.ground_range_m(float(v)) or math.nan for v in (rows + 0.5) * scale])
+        k = self.curvature_per_m
+        turned = np.abs(k) * x
+        ok = np.isfinite(x) & (turned < 1.0) & (x <= reach_m)
+        x = np.where(ok, x, 1.0)
+        centre = k * x * x / (1.0 + np.sqrt(1.0 - np.minimum(turned, 0.999) ** 2))  # the arc's lateral offset, stably
+        half = 0.5 * PATH_CAR_WIDTHS * self.width_m / (1.0 - 2.0 * INSET)
+        u_left, _, front_l = camera.project_ground(x, centre + half)
+        u_right, _, front_r = camera.project_ground(x, centre - half)
+        keep = ok & front_l & front_r
+        return np.where(keep, u_left / scale, np.nan), np.where(keep, u_right / scale, np.nan)
+
+
 @dataclass(frozen=True)
 class Obstacle:
     """An object in the ego lane: its columns and the row it stands on (frame pixels), bearing and range."""
@@ -105,16 +140,21 @@ def detect_obstacle(
 def search_lane(
     maps: SurfaceMaps, road: RoadAppearance, region: RoadRegion, left: LaneLine, right: LaneLine, camera: CameraModel,
     scale: float, *, interior: np.ndarray | None = None, smooth_objects: bool = True, edge_paint: np.ndarray | None = None,
+    bounds: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> LaneSearch:
     """The nearest object in the ego lane of a working image, and the nearest stop line (a painted band across it).
 
-    The interior lies between the straight boundaries, inset by INSET of the lane width — or, when the lane model bends,
-    is given: ``interior``, bool over the road rows (``ground_lanes.lane_interior``). ``smooth_objects``: see
+    The interior lies between the straight boundaries, inset by INSET of the lane width — or between ``bounds`` (each
+    road row's left and right column, NaN: nothing searched there: ``RoutePath.bounds_px``) — or, when the lane model
+    bends, is given: ``interior``, bool over the road rows (``ground_lanes.lane_interior``). ``smooth_objects``: see
     ``foreign_mask``."""
     line_m: float | None = None
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
     if interior is None:
-        a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
+        if bounds is None:
+            a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
+        else:
+            a, b = np.nan_to_num(bounds[0], nan=0.0), np.nan_to_num(bounds[1], nan=0.0)
         inset = INSET * (b - a)
         lo = np.clip(np.ceil(a + inset), 0, region.width_px).astype(np.int64)
         hi = np.clip(np.floor(b - inset), 0, region.width_px).astype(np.int64)
