@@ -679,6 +679,7 @@ def cmd_metadrive(args: argparse.Namespace) -> int:
             seconds=args.seconds, controller=args.baseline or "guarded", cruise_mps=args.cruise_mps, range_sensor=args.range,
             lead=args.lead, lead_ahead_m=args.lead_ahead, lead_speed_mps=args.lead_speed, width_px=args.width,
             height_px=args.width * 3 // 4, rules=args.rules, video=args.video, plots=not args.no_plots, mcap=args.mcap,
+            route=args.route == "map",
         )
     except ValueError as exc:
         raise FearguardError(f"metadrive: {exc}") from None
@@ -1026,6 +1027,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="unguarded: the lane steering alone at cruise; expert: MetaDrive's own IDM policy at cruise")
     md.add_argument("--range", choices=("none", "radar"), default="none",
                     help="forward range sensor: none (camera only) or a 0.3-80 m radar from the simulator's truth")
+    md.add_argument("--route", choices=("map", "none"), default="map",
+                    help="map: the navigation's route steering where the markings end (policy.route; default); none: the camera alone")
     md.add_argument("--lead", choices=("slower", "stopped"), default=None, help="add a car in the ego's lane ahead")
     md.add_argument("--lead-ahead", type=_number(above=0.0), default=35.0,
                     help="its distance ahead, bumper to bumper (m, default 35: on the first block, the lanes MetaDrive knows at the start)")

@@ -13,9 +13,9 @@ from collections.abc import Callable
 from dataclasses import replace
 
 from fearguard.drive.world import Decision, Sensed
+from fearguard.perception import FrameSteering
 from fearguard.supervisor import FearGuard
 from fearguard.vision.frame import FrameAnalysis
-from fearguard.vision.lane_steering import HoughLaneSteering
 
 SpeedRule = Callable[[Sensed], float]  # the speed an unsupervised controller asks for at this instant
 
@@ -38,7 +38,7 @@ class Guarded:
 class Unguarded:
     """The steering estimator alone, at the speed its rule asks for; on a fault it holds the last angle."""
 
-    def __init__(self, name: str, estimator: HoughLaneSteering, speed: SpeedRule, max_steering_deg: float) -> None:
+    def __init__(self, name: str, estimator: FrameSteering, speed: SpeedRule, max_steering_deg: float) -> None:
         self.name = name
         self.estimator = estimator
         self.speed = speed
@@ -53,7 +53,7 @@ class Unguarded:
 
 
 def unsupervised_steering(
-    estimator: HoughLaneSteering, frame: object, last: float, limit: float, t_s: float = math.nan,
+    estimator: FrameSteering, frame: object, last: float, limit: float, t_s: float = math.nan,
 ) -> tuple[float, FrameAnalysis | None]:
     """What a car without a supervisor does with its estimator's answer: use it; on a fault, keep the last angle.
 

@@ -127,3 +127,27 @@ def test_the_near_aim_does_not_weave_at_speed(speed_mps: float) -> None:
     """One aim for every cruise: at 15-22 m/s, one step late, the pursuit to 9 m ahead settles onto a gentle curve
     (R 150 m: 3 m/s² at 21 m/s, road_car's lateral cap) within 0.15 m — no weaving from aiming near at speed."""
     assert _max_offset_m(p.AIM_M, 150.0, speed_mps) <= 0.15
+
+
+# -- the route's aim (the world's navigation, for policy.route) ------------------------------------------------------
+@given(heading=st.floats(-math.pi, math.pi), radius=st.floats(12.0, 400.0), left=st.booleans(), aim=st.floats(4.0, 11.0))
+def test_route_bearing_on_a_circular_route_is_pure_pursuits(heading: float, radius: float, left: bool, aim: float) -> None:
+    """The camera on a circle of radius R, heading along it: the route point ``aim`` away on the circle lies at
+    asin(aim / 2R) from the heading, to the side the route turns (+ = left, as MetaDrive's angles and steering)."""
+    sign = 1.0 if left else -1.0
+    centre_dir = heading + sign * math.pi / 2.0  # the circle's centre lies to the side of the turn
+    centre = np.array([radius * math.cos(centre_dir), radius * math.sin(centre_dir)])
+    start = math.atan2(-centre[1], -centre[0])  # the camera (at the origin) seen from the centre
+    arc = np.arange(0.0, 3.0 * aim, 0.01) / radius
+    points = centre + radius * np.stack([np.cos(start + sign * arc), np.sin(start + sign * arc)], axis=1)
+    bearing = p.route_bearing_deg(points, (0.0, 0.0), heading, aim)
+    assert bearing is not None
+    assert bearing == pytest.approx(sign * math.degrees(math.asin(aim / (2.0 * radius))), abs=0.1)
+
+
+def test_route_bearing_straight_ahead_is_zero_and_a_short_route_has_none() -> None:
+    ahead = np.stack([np.linspace(0.0, 30.0, 61), np.zeros(61)], axis=1)
+    assert p.route_bearing_deg(ahead, (0.0, 0.0), 0.0, 9.0) == pytest.approx(0.0)
+    assert p.route_bearing_deg(ahead, (0.0, 0.0), math.radians(10.0), 9.0) == pytest.approx(-10.0)  # heading left of it: steer right
+    assert p.route_bearing_deg(ahead[:10], (0.0, 0.0), 0.0, 9.0) is None  # the known route ends 4.5 m ahead
+    assert p.route_bearing_deg(np.empty((0, 2)), (0.0, 0.0), 0.0, 9.0) is None

@@ -155,3 +155,34 @@ def test_a_drive_runs_in_a_dask_worker_as_metadrive_suite_jobs_runs_it(tmp_path:
     rows = [json.loads(line) for line in (tmp_path / "runs.jsonl").read_text().splitlines()]
     assert not interrupted and [r["controller"] for r in rows] == ["expert", "guarded"]  # a failed drive raises here
     assert all(r["progress_m"] > 0 and r["crashes"] == 0 for r in rows)
+
+
+def test_the_route_steering_turns_the_way_the_expert_turns_through_a_junction() -> None:
+    """The navigation's route (``route_steering_deg``) on MetaDrive's own lanes: ~0 on the straight first block, and
+    the same way as the expert's wheel where it turns (the 4-way junction of SXCS seed 3 turns left, the next curve)."""
+    w = MetaDriveWorld(Scenario(map_blocks="SXCS", seed=3, traffic_density=0.0, render=False), seconds=20.0)
+    try:
+        expert, rows = Expert(w, 10.0), []
+        while (sensed := w.sense()) is not None:
+            decision = expert.decide(sensed)
+            w.act(sensed, decision)
+            rows.append((sensed.t_s, sensed.observation.route_steering_deg, decision.action.steer))
+    finally:
+        w.close()
+    assert all(route is not None for _, route, _ in rows)
+    assert all(abs(route) < 1.0 for t, route, _ in rows if t < 8.0)
+    turning = [(route, steer) for _, route, steer in rows if abs(steer) > 0.15]  # the expert's wheel beyond 6 deg
+    assert len(turning) >= 5
+    assert sum(np.sign(route) == np.sign(steer) for route, steer in turning) >= 0.8 * len(turning)
+
+
+def test_a_guarded_car_crosses_a_junction_on_its_route_without_stopping(tmp_path: Path) -> None:
+    """SXCS seed 3, no traffic: at the 4-way junction the markings end and the route turns left; the car follows the
+    route in CAUTION (no EMERGENCY) and drives on beyond it (without the route it stopped at the entry: 39 %)."""
+    result = drive(DriveOptions(map_blocks="SXCS", seed=3, traffic_density=0.0, seconds=18.0, plots=False), tmp_path)
+    s = result.summary
+    lines = [json.loads(line) for line in (tmp_path / "log.jsonl").read_text().splitlines()]
+    assert s["crashes"] == 0 and s["out_of_road"] == 0
+    assert not any(line["mode"] == "EMERGENCY" for line in lines)
+    assert any("following the route" in r for line in lines for r in line["reasons"])
+    assert s["progress_m"] > 135.0  # the junction spans ~95-131 m of the route (the expert turns there from 11 to 14.5 s)

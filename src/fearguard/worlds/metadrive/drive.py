@@ -30,10 +30,12 @@ from fearguard.drive.world import Controller, Decision, Sensed
 from fearguard.fuzzy.loader import bundled_rules_path, load_rules
 from fearguard.outputs.recorder import Recorder
 from fearguard.outputs.report import json_value
+from fearguard.perception import FrameSteering
 from fearguard.supervisor import FearGuard
 from fearguard.vision.lane_steering import HoughLaneSteering
 from fearguard.worlds.metadrive.metrics import stopped_car_outcome, summarize_drive, supervisor_times
 from fearguard.worlds.metadrive.preset import AIM_M, CAR_LENGTH_M, CRUISE_MPS, STEP_S, metadrive_limits
+from fearguard.worlds.metadrive.steering import NavigatedSteering
 from fearguard.worlds.metadrive.world import DEFAULT_MAP, MetaDriveWorld, Scenario, require_positive
 
 CONTROLLERS = ("guarded", "unguarded", "expert")
@@ -53,6 +55,7 @@ class DriveOptions:
     controller: str = "guarded"
     cruise_mps: float = CRUISE_MPS
     range_sensor: str = "none"
+    route: bool = True  # the navigation's route steering in every observation (policy.route follows it where the markings end)
     lead: str | None = None
     lead_ahead_m: float = 35.0
     lead_speed_mps: float = 5.0
@@ -96,7 +99,7 @@ class Expert:
         return Decision(math.nan, self.cruise_mps, action=action)  # no aim-point bearing: the log's steer is its own
 
 
-def controller_for(options: DriveOptions, world: MetaDriveWorld, guard: FearGuard | None, lanes: HoughLaneSteering,
+def controller_for(options: DriveOptions, world: MetaDriveWorld, guard: FearGuard | None, lanes: FrameSteering,
                    max_steering_deg: float) -> Controller:
     """The drive's controller: fearguard, the lane steering alone, or MetaDrive's expert."""
     if guard is not None:
@@ -118,7 +121,8 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None, on_step: Cal
     world = MetaDriveWorld(o.scenario(), seconds=o.seconds, aim_m=AIM_M)
     open_s = time.perf_counter() - began
     limits = metadrive_limits(radar=o.range_sensor == "radar", aim_m=world.aim_m)
-    lanes = HoughLaneSteering(camera=world.camera, fps=world.fps, aim_m=AIM_M)
+    camera_lanes = HoughLaneSteering(camera=world.camera, fps=world.fps, aim_m=AIM_M)
+    lanes = NavigatedSteering(camera_lanes, lambda: world.route_now, limits.max_steering_deg) if o.route else camera_lanes
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
     guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=world.camera) if o.controller == "guarded" else None
     controller = controller_for(o, world, guard, lanes, limits.max_steering_deg)

@@ -28,6 +28,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
+import numpy as np
+
 from fearguard.camera import CameraModel
 from fearguard.vehicle import PRESETS, VehicleLimits
 
@@ -143,6 +145,20 @@ def pursuit_wheel_angle_deg(bearing_deg: float, aim_m: float) -> float:
     y = aim_m * math.sin(a)
     kappa = 2.0 * y / (x * x + y * y)
     return math.degrees(math.atan(WHEELBASE_M * kappa))
+
+
+def route_bearing_deg(points_xy: np.ndarray, camera_xy: tuple[float, float], heading_rad: float, aim_m: float) -> float | None:
+    """Pure pursuit's aim on a route: the bearing (deg, + = left) from the camera, heading ``heading_rad``, of the first
+    route point (in order along the route) at least ``aim_m`` from it; None when the route ends nearer. MetaDrive's
+    angles count left-positive from its x axis, as its steering does."""
+    pts = np.asarray(points_xy, dtype=float).reshape(-1, 2)
+    rel = pts - np.asarray(camera_xy, dtype=float)
+    far = np.flatnonzero(np.hypot(rel[:, 0], rel[:, 1]) >= aim_m)
+    if far.size == 0:
+        return None
+    dx, dy = rel[far[0]]
+    angle = (math.atan2(dy, dx) - heading_rad + math.pi) % (2.0 * math.pi) - math.pi
+    return math.degrees(angle)
 
 
 def throttle_for(speed_target_mps: float, speed_mps: float) -> float:

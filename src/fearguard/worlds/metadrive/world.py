@@ -1,7 +1,8 @@
 """MetaDrive as a world for fearguard: the ego car's camera, its ground truth, traffic, light, a lead and a radar.
 
 ``MetaDriveWorld`` is a ``World`` of the one driver loop (``drive/world.py``): ``sense()`` gives the camera frame, the
-speed and (with a radar) the range as a ``Sensed``; ``act(sensed, decision)`` drives one 0.1 s step — the
+speed, (with a radar) the range and the navigation's route steering (``route_steering_deg``: where the markings end,
+the supervisor may follow it, ``policy.route``) as a ``Sensed``; ``act(sensed, decision)`` drives one 0.1 s step — the
 pure-pursuit arc to the controller's aim-point bearing at its speed (``preset.steering_action``), or the expert's own
 MetaDrive action (``Decision.action``) — and returns the log's fields of the truth after it; the truth of every step
 is kept (``samples``) for the metrics. MetaDrive is imported lazily (``headless.py`` applies every setting that makes
@@ -36,6 +37,7 @@ from fearguard.worlds.metadrive.headless import ENGINE_SETTINGS, MIN_CAMERA_PX, 
 from fearguard.worlds.metadrive.metrics import Sample
 from fearguard.worlds.metadrive.preset import (
     AIM_M,
+    CAMERA_AHEAD_OF_CENTRE_M,
     CAR_LENGTH_M,
     CAR_WIDTH_M,
     DECISION_REPEAT,
@@ -48,6 +50,7 @@ from fearguard.worlds.metadrive.preset import (
     Action,
     lane_aim_m,
     metadrive_camera,
+    route_bearing_deg,
     steering_action,
 )
 
@@ -99,6 +102,7 @@ class Scenario:
     lead_speed_mps: float = 5.0  # [m/s] the slower lead's cruise
     range_sensor: str = "none"
     render: bool = True  # False: no camera (a controller that only reads the truth); frames are black
+    route: bool = True  # the navigation's route steering in every Observation (``route_steering_deg``); False: none
 
     def __post_init__(self) -> None:
         blocks = self.map_blocks
@@ -161,6 +165,8 @@ class Truth:
         return self.crashed_vehicle or self.crashed_object or self.crashed_other
 
 
+ROUTE_STEP_M = 0.5  # [m] the route's lanes sampled this finely for its aim point (0.5 m at 9 m: 3° at most)
+ROUTE_REACH = 3.0  # [-] the route sampled this many aim distances ahead along its lanes (a U-turn's arc is π/2 of its chord)
 GAP_RANGE_M = 150.0  # [m] the truth looks this far ahead for the vehicle ahead (the radar sees to RADAR_MAX_RANGE_M)
 
 
@@ -209,6 +215,7 @@ class MetaDriveWorld:
         if s.render:
             self._image = self._render()  # the first frame with the light, the shadows off and the lead
         self._expert: Any = None
+        self.route_now: float | None = None  # the route's steering at the last ``sense`` (worlds/metadrive/steering.py reads it)
         self.start: Truth = self.truth()
         self.samples: list[Sample] = []
         self.sim_ms: list[float] = []
@@ -220,14 +227,16 @@ class MetaDriveWorld:
         return self._ended
 
     def sense(self) -> Sensed | None:
-        """The camera frame (BGR uint8; None without a camera), the speed and the radar range; None once the drive's
-        time is up or MetaDrive ended the episode."""
+        """The camera frame (BGR uint8; None without a camera), the speed, the radar range and the route's steering
+        (``Scenario.route``); None once the drive's time is up or MetaDrive ended the episode."""
         if self._ended or (self.total is not None and self._steps >= self.total):
             return None
         truth = self.truth()
         radar = radar_range_m(truth.gap_m) if self.scenario.range_sensor == "radar" else None
         frame = self._image if self.scenario.render else None
-        obs = Observation(t_s=truth.t_s, speed_mps=truth.speed_mps, frame=frame, ultrasonic_range_m=radar)
+        route = self.route_now = self.route_steering_deg() if self.scenario.route else None
+        obs = Observation(t_s=truth.t_s, speed_mps=truth.speed_mps, frame=frame, ultrasonic_range_m=radar,
+                          route_steering_deg=route)
         return Sensed(self._steps, truth.t_s, obs, frame)
 
     def act(self, sensed: Sensed, decision: Decision) -> Outcome:
@@ -250,7 +259,7 @@ class MetaDriveWorld:
             out_of_road=t.out_of_road, on_solid_line=t.on_solid_line, over_centre_line=t.over_centre_line,
             crashed_vehicle=t.crashed_vehicle,
             crashed_object=t.crashed_object, gap_m=t.gap_m, lead_speed_mps=t.lead_speed_mps, ttc_s=t.ttc_s,
-            radar_m=sensed.observation.ultrasonic_range_m,
+            radar_m=sensed.observation.ultrasonic_range_m, route_steering_deg=sensed.observation.route_steering_deg,
         )
         return Outcome(fields, f"v {t.speed_mps:.1f} m/s", t.speed_mps, self._ended)
 
@@ -350,6 +359,26 @@ class MetaDriveWorld:
                     speed = float(velocity[0] * math.cos(heading) + velocity[1] * math.sin(heading))
                 break
         return best, speed
+
+    def route_steering_deg(self) -> float | None:
+        """The route's aim-point bearing (deg, + = left) ``aim_m`` from the camera: the centre of the route's lane at
+        the ego's lane index, as MetaDrive's navigation knows it (the map and a perfect localisation: what MetaDrive's own
+        agents observe as navigation). None when the known route ends nearer."""
+        v = self.ego
+        lanes = self._lanes_ahead()
+        ego_long, _ = lanes[0].local_coordinates(v.position)
+        heading = float(v.heading_theta)
+        camera = (float(v.position[0]) + CAMERA_AHEAD_OF_CENTRE_M * math.cos(heading),
+                  float(v.position[1]) + CAMERA_AHEAD_OF_CENTRE_M * math.sin(heading))
+        reach = ROUTE_REACH * (CAMERA_AHEAD_OF_CENTRE_M + self.aim_m)  # along the lanes: enough for the tightest turn
+        points = []
+        for offset, lane in _cumulative(lanes, ego_long):
+            points.extend(lane.position(float(s), 0.0) for s in np.arange(max(0.0, -offset), float(lane.length), ROUTE_STEP_M))
+            if offset + float(lane.length) >= reach:
+                break
+        if not points:
+            return None
+        return route_bearing_deg(np.asarray(points, dtype=float)[:, :2], camera, heading, self.aim_m)
 
     def _others(self) -> list[Any]:
         objects = self.env.engine.get_objects(lambda o: o is not self.ego and hasattr(o, "position"))
