@@ -333,9 +333,10 @@ class FearGuard:
         now_mps = speed if speed is not None else (st.limit_mps if st.limit_mps is not None else 0.0)
         dt = 0.0 if st.last_t_s is None else t - st.last_t_s
         road_calm = result.cause_fears[Cause.ROAD] < cfg.caution_fear
-        moving_at = speed - closing if speed is not None and closing is not None and math.isfinite(range_m) else None
-        route = next_route(st.routed_m, self._route(obs, notes), road_calm, clear_m, path_doubt, speed, dt, cfg, v, t_s=t,
-                           object_speed_mps=moving_at, oncoming_t_s=st.oncoming_t_s)
+        route_deg = self._route(obs, notes)
+        object_mps = speed - closing if speed is not None and closing is not None and math.isfinite(range_m) else None
+        route = next_route(st.routed_m, route_deg, road_calm, clear_m, path_doubt, speed, dt, cfg, v, t_s=t,
+                           object_speed_mps=object_mps, oncoming_t_s=st.oncoming_t_s)
         st.routed_m, st.oncoming_t_s = route.routed_m, route.oncoming_t_s
         grace = self._grace_s(over, imminent, cues, path_doubt, now_mps, lead, route.following)
         st.mode, event = next_mode(st.mode, result.fear, t, at_once=imminent, cfg=cfg, cause_fears=result.cause_fears, over=over,
@@ -345,7 +346,7 @@ class FearGuard:
         cause = self._dominant_cause(result, range_m)
         reasons = [f"fear {result.fear:.2f} ({result.level.name}), dominant cause {cause.value}", *moving]
         lane_now = perceived.lane_steering_deg if perceived is not None else None
-        check = self._lane_check(perceived, steering, speed_now, self._route(obs, [])) if road_calm else None
+        check = self._lane_check(perceived, steering, speed_now, route_deg) if road_calm else None
         choice = lane_step(check, st.estimator_distrusted, steering, lane_now, st.trusted_steering_deg, cfg, v)
         st.estimator_distrusted = choice.distrusted
         wanted, strategy = choice.steering_deg, Strategy.PASS_THROUGH
@@ -363,7 +364,7 @@ class FearGuard:
         reasons.extend([choice.reason] if choice.reason else [])
         if st.mode.mode is Mode.EMERGENCY:
             plan = self._emergency(result, lead, imminent, path_doubt, cues, perceived, t, dt, speed_now, wanted, steering,
-                                   self._route(obs, []), route.cap_mps if route.following else None)
+                                   route_deg, route.cap_mps if route.following else None)
             strategy, cause, wanted = plan.strategy, plan.cause or cause, plan.steering_deg
             caps.append(plan.cap_mps)
             reasons.extend(plan.reasons)
