@@ -84,6 +84,12 @@ class Observation:
     # car may follow it (``route_blind_m``) instead of stopping — across a junction whose markings end. None: no route
     route_steering_deg: float | None = None
 
+    def route_deg(self, max_steering_deg: float) -> float | None:
+        """The route steering as fearguard follows it: a finite reading, clipped to ±``max_steering_deg``; None: no route
+        (none given, or no finite number)."""
+        value = finite_reading(self.route_steering_deg)
+        return None if value is None else min(max(value, -max_steering_deg), max_steering_deg)
+
     def __post_init__(self) -> None:
         if isinstance(self.lead, LeadBox):  # the contract's ``lead=`` took a box too: it keeps working
             object.__setattr__(self, "lead_box", self.lead if self.lead_box is None else self.lead_box)

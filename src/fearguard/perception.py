@@ -233,12 +233,9 @@ class Perception:
     def _route_path(self, obs: Observation) -> RoutePath | None:
         """The path the caller's route steers (``Observation.route_steering_deg``, within the steering range; None: no
         finite route) as the bicycle model the policy uses reads a steering angle: curvature tan(δ) / wheelbase."""
-        route = finite_reading(getattr(obs, "route_steering_deg", None))
-        if route is None:
-            return None
         v = self.vehicle
-        angle = math.radians(min(max(route, -v.max_steering_deg), v.max_steering_deg))
-        return RoutePath(math.tan(angle) / v.wheelbase_m, v.width_m)
+        route = obs.route_deg(v.max_steering_deg)
+        return None if route is None else RoutePath(math.tan(math.radians(route)) / v.wheelbase_m, v.width_m)
 
     def _vision(self, frame: object, t: float, box: LeadBox | None, reasons: list[str], facts: list[str],
                 speed_mps: float | None = None, path: RoutePath | None = None) -> FrameAnalysis | None:

@@ -302,17 +302,11 @@ class FearGuard:
     def _route(self, obs: Observation, notes: list[str]) -> float | None:
         """The route steering given (None: none), within the steering range; one that is no finite number is no route,
         and the reasons say so once."""
-        raw = getattr(obs, "route_steering_deg", None)
-        if raw is None:
-            return None
-        value = finite_reading(raw)
-        if value is None:
-            if not self._state.route_noted:
-                self._state.route_noted = True
-                notes.append(f"route_steering_deg {describe(raw)} is not a finite number: no route followed")
-            return None
-        limit = self.vehicle.max_steering_deg
-        return min(max(value, -limit), limit)
+        value = obs.route_deg(self.vehicle.max_steering_deg)
+        if value is None and obs.route_steering_deg is not None and not self._state.route_noted:
+            self._state.route_noted = True
+            notes.append(f"route_steering_deg {describe(obs.route_steering_deg)} is not a finite number: no route followed")
+        return value
 
     def _decide(
         self, obs: Observation, t: float, cues: Cues, result: FearResult, steering: float, notes: list[str],

@@ -174,7 +174,8 @@ def next_recovery(
     budget's 2 m. A line found in a frame here and there (a shadow's edge) is no re-acquisition.
     The distance is the speed integrated over time (unknown speed counts as the top speed: the creep ends sooner).
     A creep steered by the caller's route (``routed``: ``policy.route``; a known path, not a guess) is one creep that goes on
-    until ``route_blind_m`` in all — across the rest of a junction after a stop in it — not a string of car lengths.
+    while the route's budget lasts (the caller's ``routed``, ``route_blind_m`` in all) — across the rest of a junction after
+    a stop in it — not a string of car lengths.
     """
     moved = max(0.0, speed_mps) * max(dt_s, 0.0)
     last = rec.guided_last_s  # set whenever a spell is (guided_since_s)
@@ -194,10 +195,8 @@ def next_recovery(
     if creeping:
         blind_m = rec.blind_m + (moved if blind else 0.0)  # only a creep's own metres count (following a lead is no blind creep)
         creep_m, total_m = rec.creep_m + moved, rec.total_m + moved
-        done = (creep_m >= cfg.recovery_creep_m or t_s - rec.creep_since_s >= cfg.recovery_creep_s - TIME_EPS_S
-                or total_m >= cfg.recovery_max_total_m or (blind and blind_m >= cfg.recovery_blind_m))
-        if routed:
-            done = total_m >= cfg.route_blind_m
+        done = not routed and (creep_m >= cfg.recovery_creep_m or t_s - rec.creep_since_s >= cfg.recovery_creep_s - TIME_EPS_S
+                               or total_m >= cfg.recovery_max_total_m or (blind and blind_m >= cfg.recovery_blind_m))
         if eligible and not done:
             why = (f"re-acquisition creep {rec.creeps} of {cfg.recovery_max_creeps} "
                    f"({creep_m:.2f} of {float(cfg.recovery_creep_m):.2f} m, "

@@ -157,8 +157,12 @@ def route_bearing_deg(points_xy: np.ndarray, camera_xy: tuple[float, float], hea
     if far.size == 0:
         return None
     dx, dy = rel[far[0]]
-    angle = (math.atan2(dy, dx) - heading_rad + math.pi) % (2.0 * math.pi) - math.pi
-    return math.degrees(angle)
+    return math.degrees(wrap_rad(math.atan2(dy, dx) - heading_rad))
+
+
+def wrap_rad(angle_rad: float) -> float:
+    """The angle in [−π, π)."""
+    return (angle_rad + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def throttle_for(speed_target_mps: float, speed_mps: float) -> float:

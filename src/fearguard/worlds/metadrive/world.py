@@ -52,6 +52,7 @@ from fearguard.worlds.metadrive.preset import (
     metadrive_camera,
     route_bearing_deg,
     steering_action,
+    wrap_rad,
 )
 
 DEFAULT_MAP = "SCSC"  # straight, curve, straight, curve: MetaDrive's block string (S straight, C circular curve)
@@ -318,7 +319,7 @@ class MetaDriveWorld:
         ttc = gap / closing if math.isfinite(gap) and math.isfinite(closing) and closing > 1e-3 else math.inf
         return Truth(
             t_s=self.t_s, x_m=float(v.position[0]), y_m=float(v.position[1]), heading_rad=float(v.heading_theta),
-            speed_mps=speed, lane_offset_m=-float(lat), heading_error_deg=math.degrees(_wrap(float(v.heading_theta) - lane_heading)),
+            speed_mps=speed, lane_offset_m=-float(lat), heading_error_deg=math.degrees(wrap_rad(float(v.heading_theta) - lane_heading)),
             lane_index=int(v.lane_index[-1]), lane_width_m=float(lane.width), out_of_road=bool((not v.on_lane) or v.crash_sidewalk),
             on_solid_line=bool(v.on_yellow_continuous_line or v.on_white_continuous_line),
             over_centre_line=int(v.lane_index[-1]) == 0 and -float(lat) > 0.5 * float(lane.width),
@@ -502,10 +503,6 @@ def _cumulative(lanes: Sequence[Any], start_long: float) -> list[tuple[float, An
         out.append((offset, lane))
         offset += float(lane.length)
     return out
-
-
-def _wrap(angle_rad: float) -> float:
-    return (angle_rad + math.pi) % (2 * math.pi) - math.pi
 
 
 def _idm_class(cruise_mps: float, *, lane_change: bool) -> type:
