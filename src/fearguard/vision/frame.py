@@ -30,6 +30,7 @@ from fearguard.vision.bend import Bend, trace_bend
 from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
 from fearguard.vision.exposure import Exposure, road_exposure
 from fearguard.vision.ground_lanes import GroundLanes, GroundLaneSpec, aim_point, ground_lanes_in_image
+from fearguard.vision.lane_tracker import TrackedLanes
 from fearguard.vision.lanes import (
     PITCHED_DEG,
     LaneLine,
@@ -270,10 +271,7 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
     tracked = trackers.lanes.update(t_s, region, det.left, det.right)
     left = det.left if tracked.left is None or det.left is None else _with_track(det.left, tracked.left)
     right = det.right if tracked.right is None or det.right is None else _with_track(det.right, tracked.right)
-    if left is None and tracked.left is not None and right is not None:
-        left = tracked.left  # coasting track of a boundary missed this frame (keeps the aim point steady)
-    if right is None and tracked.right is not None and left is not None:
-        right = tracked.right
+    left, right = coasting_sides(left, right, tracked)
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
     bend, far = None, None
     if p.camera.pitch_deg < PITCHED_DEG:  # a road camera: a model car's low, steep view of a tight track is not traced
@@ -293,6 +291,19 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
         features=det.features, paint_integral=det.maps.paint_integral, aim_row_px=v_aim, lane_width_px=width_px, bend=bend,
         curves_px=_bend_polylines(bend, rows) if bend is not None else None,
     )
+
+
+def coasting_sides(left: LaneLine | None, right: LaneLine | None, tracked: TrackedLanes) -> tuple[LaneLine | None, LaneLine | None]:
+    """The boundaries to steer by: this frame's detections; a side missed this frame, with the other side found, by its
+    track coasting through the miss (it keeps the aim point steady) — if that track was once a side of the lane seen
+    well (``paired``). A track begun on a stray ridge (the speckle of glare at support 0.05, grass at the verge) is no
+    side of the lane: coasting, it held a model car's aim half way to it, and the creep through low sun turned away from
+    the one line it could see."""
+    if left is None and right is not None and tracked.left is not None and tracked.paired[0]:
+        left = tracked.left
+    if right is None and left is not None and tracked.right is not None and tracked.paired[1]:
+        right = tracked.right
+    return left, right
 
 
 def _bend_polylines(bend: Bend, rows: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
