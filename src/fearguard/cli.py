@@ -419,6 +419,7 @@ def _by(summary: dict) -> str:
 def cmd_learn(args: argparse.Namespace) -> int:
     """Recordings of normal driving → a track profile (.npz) and track.png beside it; prints what it learnt."""
     from fearguard.camera import load_camera
+    from fearguard.track.floor import USUAL_SHARE
     from fearguard.track.learn import LearnOptions, learn_track
     from fearguard.track.picture import draw_track
     from fearguard.track.profile import save_track
@@ -438,6 +439,10 @@ def cmd_learn(args: argparse.Namespace) -> int:
     print(f"  light: brightness band {p.brightness_band[0]:.0f}–{p.brightness_band[1]:.0f} (2nd–98th percentile)")
     print(f"  lane: median confidence {p.lane_confidence_median:.2f} on the recordings: {lane}")
     print(f"  markings: {colours}")
+    floor = p.floor
+    print("  floor: none learnt" if floor is None else
+          f"  floor: {len(floor.colours_lab)} colours, usually seen on {float((floor.usual >= USUAL_SHARE).mean()):.0%} of the "
+          f"picture, {floor.hidden_usual:.2f} of it hidden on a typical frame")
     print(f"  familiarity: {p.bank.shape[0]} frames kept, {p.basis.shape[0]} components, reference distance "
           f"{p.reference_distance:.3f}")
     print(f"wrote {out} and {picture}")

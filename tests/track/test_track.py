@@ -267,8 +267,8 @@ def test_where_the_lane_model_never_saw_the_track_familiarity_is_its_guidance(ro
     from fearguard.track.reading import read_as_learnt
 
     frame = _frames(shared_data / ROBOCAR, 1400, 1401, 1)[0]
-    blind = replace(robocar_track, lane_confidence_median=0.0, occlusion_usual=1.0)
-    seen = replace(robocar_track, lane_confidence_median=0.8, occlusion_usual=0.6)
+    blind = replace(robocar_track, lane_confidence_median=0.0, occlusion_usual=1.0, floor=None)  # the floor: test_floor.py
+    seen = replace(robocar_track, lane_confidence_median=0.8, occlusion_usual=0.6, floor=None)
     a = read_as_learnt(blind, frame, 0.0, 120.0, 1.0, (80.0, 180.0), 0.1)
     assert a.lane_confidence == a.familiarity and a.occlusion == 0.0 and any("did not see" in f for f in a.facts)
     b = read_as_learnt(seen, frame, 0.4, 120.0, 0.6, (80.0, 180.0), 0.1)

@@ -8,7 +8,8 @@ below ``MOVING_THROTTLE``) are not normal driving and are left out. From the res
   and the recordings' own distances for the calibration;
 - the normal light: the ``BAND_PERCENTILES`` of the brightness cue as the camera pipeline measures it;
 - the camera's lane confidence on this track (its median), how much of the marking region its occlusion measure calls
-  hidden in normal driving (``OCCLUSION_PERCENTILE``), and the colours of the track's markings.
+  hidden in normal driving (``OCCLUSION_PERCENTILE``), and the colours of the track's markings;
+- the floor: its colours and where the picture usually shows it (``floor.py``).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from fearguard.errors import FearguardError
 from fearguard.replay.recordings import open_recording
 from fearguard.replay.sources import parse_position
 from fearguard.track.features import frame_features
+from fearguard.track.floor import floor_lab, learn_floor
 from fearguard.track.profile import (
     BAND_PERCENTILES,
     CALIBRATION_GAP_S,
@@ -80,13 +82,14 @@ class _Frames:
     lane: list[float]
     occlusion: list[float]
     marking_pixels: list[np.ndarray]
+    floor: list[np.ndarray]
     typical: list[np.ndarray]
 
 
 def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnOptions(),
                 on_frame: Callable[[int], None] | None = None) -> Learnt:
     """Learn a profile from recordings of normal driving (raises ``FearguardError`` when there is too little)."""
-    got = _Frames([], [], [], [], [], [], [], [])
+    got = _Frames([], [], [], [], [], [], [], [], [])
     read = standing = skipped = 0
     for rec_id, path in enumerate(recordings):
         source = open_recording(path, options.fps)
@@ -115,6 +118,7 @@ def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnO
                 got.lane.append(a.lane_confidence)
                 got.occlusion.append(a.occlusion)
                 got.marking_pixels.append(_contrast_pixels(frame.image_bgr))
+                got.floor.append(floor_lab(frame.image_bgr))
                 if len(got.typical) < 64:
                     got.typical.append(frame.image_bgr)
         skipped += len(source.skipped)
@@ -161,6 +165,7 @@ def _fit(got: _Frames, source: str) -> TrackProfile:
         lane_confidence_median=float(np.median(lanes)) if lanes.size else math.nan,
         marking_colours_bgr=_marking_colours(got.marking_pixels),
         occlusion_usual=float(np.percentile(occ, OCCLUSION_PERCENTILE)) if occ.size else math.nan,
+        floor=learn_floor(got.floor),
     )
 
 

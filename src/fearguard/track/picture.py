@@ -1,5 +1,6 @@
-"""track.png: one page that shows what a profile learnt — typical frames, marking colours, the light band and the
-distance histogram with its thresholds — so a user can see whether it learnt their track (docs/learning.md)."""
+"""track.png: one page that shows what a profile learnt — typical frames, marking colours, where the floor usually is,
+the light band and the distance histogram with its thresholds — so a user can see whether it learnt their track
+(docs/learning.md)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from fearguard.track.floor import USUAL_SHARE
 from fearguard.track.learn import Learnt
 from fearguard.track.profile import UNFAMILIAR_RATIO
 
@@ -27,22 +29,31 @@ def draw_track(learnt: Learnt, path: str | Path) -> Path:
         ax.imshow(cv2.cvtColor(img, cv2.COLOR_BGR2RGB))
         ax.set_axis_off()
     fig.text(0.5, 0.97, f"track profile: {p.frames_learnt} frames learnt from {p.source}", ha="center", fontsize=9, wrap=True)
-    ax = fig.add_subplot(3, 2, 3)
+    ax = fig.add_subplot(3, 3, 4)
     colours = p.marking_colours_bgr
     if len(colours):
         ax.imshow(np.clip(colours[None, :, ::-1] / 255.0, 0, 1), aspect="auto")
-        ax.set_xticks(range(len(colours)), [f"BGR {tuple(int(v) for v in c)}" for c in colours], fontsize=7)
+        ax.set_xticks(range(len(colours)), [f"BGR {tuple(int(v) for v in c)}" for c in colours], fontsize=6, rotation=25)
     else:
         ax.text(0.5, 0.5, "no marking colour seen in most frames", ha="center", va="center", fontsize=8)
         ax.set_xticks([])
     ax.set_yticks([])
-    ax.set_title("high-contrast floor colours seen in most frames (markings)", fontsize=8)
-    ax = fig.add_subplot(3, 2, 4)
+    ax.set_title("high-contrast floor colours\nseen in most frames (markings)", fontsize=8)
+    ax = fig.add_subplot(3, 3, 5)
+    if p.floor is not None:
+        ax.imshow(p.floor.usual, cmap="Greens", vmin=0.0, vmax=1.0)
+        ax.contour(p.floor.usual, levels=[USUAL_SHARE], colors="crimson", linewidths=0.8)
+        ax.set_title(f"where the floor usually is (inside red: read for\nwhat hides it); typical frame {p.floor.hidden_usual:.2f} hidden",
+                     fontsize=8)
+    else:
+        ax.text(0.5, 0.5, "no floor learnt", ha="center", va="center", fontsize=8)
+    ax.set_axis_off()
+    ax = fig.add_subplot(3, 3, 6)
     b = learnt.brightness[np.isfinite(learnt.brightness)]
     ax.hist(b, bins=40, range=(0, 255), color="grey")
     for v in p.brightness_band:
         ax.axvline(v, color="crimson")
-    ax.set_title(f"brightness of the road region: learnt band {p.brightness_band[0]:.0f}–{p.brightness_band[1]:.0f}", fontsize=8)
+    ax.set_title(f"brightness of the road region:\nlearnt band {p.brightness_band[0]:.0f}–{p.brightness_band[1]:.0f}", fontsize=8)
     ax.set_xlabel("grey level", fontsize=8)
     ax = fig.add_subplot(3, 1, 3)
     ref = p.reference_distance

@@ -26,6 +26,7 @@ import numpy as np
 
 from fearguard.errors import FileError
 from fearguard.track.features import BLOCK_SIZES, block_slices, frame_features
+from fearguard.track.floor import FLOOR_PX, FloorModel
 
 FORMAT = "fearguard-track"
 VERSION = 1
@@ -54,6 +55,7 @@ class TrackProfile:
     lane_confidence_median: float  # [0..1] the camera's lane confidence on the recordings (NaN: not measured)
     marking_colours_bgr: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) the track's markings, typical BGR
     occlusion_usual: float = math.nan  # [0..1] the OCCLUSION_PERCENTILE of the occlusion cue on the recordings (NaN: not measured)
+    floor: FloorModel | None = None  # the floor's colours and where it usually is (None: the recordings showed no steady floor)
 
     @property
     def reference_distance(self) -> float:
@@ -179,11 +181,24 @@ def profile_from_arrays(data: dict[str, np.ndarray], where: str) -> TrackProfile
     if not (math.isnan(occ_usual) or 0.0 <= occ_usual <= 1.0):
         raise FileError(where, "occlusion_usual", f"expected a share 0..1 (or NaN), got {occ_usual!r}")
     colours = need("marking_colours_bgr", 2, 3) if "marking_colours_bgr" in data else np.zeros((0, 3))
+    floor = None
+    if "floor_colours_lab" in data:  # profiles learnt before the floor model have none
+        floor_colours, radius, usual = need("floor_colours_lab", 2, 3), need("floor_radius_lab", 0), need("floor_usual", 2)
+        hidden = need("floor_hidden_usual", 0)
+        if floor_colours.shape[0] < 1 or not 0.0 <= floor_colours.min() <= floor_colours.max() <= 255.0:
+            raise FileError(where, "floor_colours_lab", f"expected 1 or more Lab colours 0..255, got {floor_colours.shape[0]}")
+        if not float(radius) > 0.0:
+            raise FileError(where, "floor_radius_lab", f"expected a distance > 0, got {float(radius)!r}")
+        if usual.shape != (FLOOR_PX[1], FLOOR_PX[0]) or not 0.0 <= usual.min() <= usual.max() <= 1.0:
+            raise FileError(where, "floor_usual", f"expected shares 0..1 of shape {(FLOOR_PX[1], FLOOR_PX[0])}, got {usual.shape}")
+        if not 0.0 <= float(hidden) <= 1.0:
+            raise FileError(where, "floor_hidden_usual", f"expected a share 0..1, got {float(hidden)!r}")
+        floor = FloorModel(floor_colours, float(radius), usual, float(hidden))
     return TrackProfile(
         source=str(data.get("source", "")), frames_learnt=int(need("frames_learnt", 0)), mean=mean, weights=weights,
         basis=basis, bank=bank, calibration_distances=np.sort(calib), brightness_band=(float(band[0]), float(band[1])),
         lane_confidence_median=float(lane) if np.ndim(lane) == 0 and lane.dtype.kind in "fiu" else math.nan,
-        marking_colours_bgr=colours, occlusion_usual=occ_usual,
+        marking_colours_bgr=colours, occlusion_usual=occ_usual, floor=floor,
     )
 
 
@@ -198,8 +213,16 @@ def save_track(profile: TrackProfile, path: str | Path) -> Path:
             bank=profile.bank, calibration_distances=profile.calibration_distances,
             brightness_band=np.array(profile.brightness_band), lane_confidence_median=np.array(profile.lane_confidence_median),
             marking_colours_bgr=profile.marking_colours_bgr, occlusion_usual=np.array(profile.occlusion_usual),
+            **_floor_arrays(profile.floor),
         )
     return p
+
+
+def _floor_arrays(floor: FloorModel | None) -> dict[str, np.ndarray]:
+    if floor is None:
+        return {}
+    return {"floor_colours_lab": floor.colours_lab, "floor_radius_lab": np.array(floor.radius_lab),
+            "floor_usual": floor.usual, "floor_hidden_usual": np.array(floor.hidden_usual)}
 
 
 def block_weights(features: np.ndarray) -> np.ndarray:

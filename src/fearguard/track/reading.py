@@ -8,6 +8,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from fearguard.track.features import as_bgr
+from fearguard.track.floor import as_occlusion
 from fearguard.track.profile import TrackProfile
 
 LANE_SEEN = 0.5  # [0..1] median lane confidence on the recordings from which the camera's lane model sees this track
@@ -30,7 +32,8 @@ def read_as_learnt(profile: TrackProfile, frame: object, lane_confidence: float,
     confidence relative to what the camera's lane model reads on this track — or, where it never saw this track's
     guidance on the recordings, how like the learnt track the picture is (the only guidance measure that track has: the
     occlusion, measured over that model's marking region, then counts through it and reads 0); otherwise the occlusion
-    relative to what normal driving on this track showed (``TrackProfile.occlusion_as_learnt``)."""
+    relative to what normal driving on this track showed (``TrackProfile.occlusion_as_learnt``). With a floor model, the
+    occlusion is at least the share of the usual floor hidden, read against the recordings (``floor_hidden``)."""
     fam, why = profile.familiarity(frame)
     facts = [why] if why else []
     lo, hi = profile.brightness_band
@@ -43,10 +46,29 @@ def read_as_learnt(profile: TrackProfile, frame: object, lane_confidence: float,
         facts.append(f"track: the camera's lane model did not see this track's guidance on the recordings (median confidence "
                      f"{seen:.2f}): the lane cue reads how like the learnt track the picture is ({fam:.2f}); occlusion, "
                      f"measured over that model's marking region, counts through it too (0 here)")
-        return AsLearnt(fam, b, fam, 0.0 if math.isfinite(fam) else fam, tuple(facts))
+        occ = floor_hidden(profile, frame, 0.0 if math.isfinite(fam) else fam, occlusion_calm, facts)
+        return AsLearnt(fam, b, fam, occ, tuple(facts))
     lane = min(1.0, lane_confidence / seen) if math.isfinite(lane_confidence) else lane_confidence
     occ = profile.occlusion_as_learnt(occlusion, occlusion_calm)
     if math.isfinite(occlusion) and occ != occlusion:
         facts.append(f"track: occlusion {occlusion:.2f} read against {profile.occlusion_usual:.2f} in normal driving on the "
                      f"recordings: {occ:.2f}")
-    return AsLearnt(fam, b, lane, occ, tuple(facts))
+    return AsLearnt(fam, b, lane, floor_hidden(profile, frame, occ, occlusion_calm, facts), tuple(facts))
+
+
+def floor_hidden(profile: TrackProfile, frame: object, occlusion: float, occlusion_calm: float, facts: list[str]) -> float:
+    """The occlusion cue, at least the share of the usual floor this picture hides (read against the recordings'
+    median); unknown (NaN, the worst) when the frame is not a picture. Appends the sentence when the floor decides."""
+    floor = profile.floor
+    if floor is None:
+        return occlusion
+    bgr = as_bgr(frame)
+    if bgr is None:
+        return math.nan
+    hidden = floor.hidden(bgr)
+    read = as_occlusion(hidden, floor.hidden_usual, occlusion_calm)
+    if not read > occlusion:  # NaN occlusion (unknown) stays the worst
+        return occlusion
+    facts.append(f"track: {hidden:.2f} of the floor the recordings show ahead is hidden or unlike it (usually "
+                 f"{floor.hidden_usual:.2f}): occlusion {read:.2f}")
+    return read

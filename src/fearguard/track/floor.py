@@ -1,0 +1,110 @@
+"""The track's floor: the colours the car drives on, and where the picture usually shows them (docs/learning.md).
+
+A wall close ahead, the car pointing off the course, a person or a box on the track, the camera knocked down: each
+hides floor that normal driving showed in that part of the picture. Learnt from the recordings:
+
+- the floor's colours: ``FLOOR_COLOURS`` Lab colours (k-means) of the patch just ahead of the car's nose (the bottom
+  middle of the picture, ``NOSE_ROWS`` × ``NOSE_COLUMNS``), where a car driving its course sees its own floor, and a
+  match radius (the ``MATCH_PERCENTILE``-th percentile of the patch pixels' distance to their nearest colour);
+- ``usual``: per cell of a ``FLOOR_PX`` thumbnail, the share of learnt frames in which it showed floor.
+
+A frame's **hidden floor** is the share of the cells that usually show floor (``usual`` ≥ ``USUAL_SHARE``, weighted by
+it) that do not now. It is read against the recordings' own median (``hidden_usual``: contaminated recordings — a few
+laps that also face a wall now and then — move a median least): up to the typical frame's share is calm, the rest
+counts linearly up to all hidden (``as_occlusion``).
+
+Written by hand (a few array operations on a 32×24 thumbnail): a colour-class membership map is not a library call.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+FLOOR_PX = (32, 24)  # [px] (width, height) of the thumbnail: coarse enough to ignore carpet texture and tape edges
+NOSE_ROWS = (0.8, 1.0)  # [-] of the height: the patch just ahead of the car's nose ...
+NOSE_COLUMNS = (0.25, 0.75)  # [-] ... of the width: the floor the car is driving on
+FLOOR_COLOURS = 20  # k-means colours of the floor (a track's floor, its tape and its patches of light)
+MATCH_PERCENTILE = 90.0  # [%] of the nose patch's distances to its nearest colour: the match radius ...
+MIN_RADIUS_LAB = 12.0  # [Lab units] ... at least this: on a plain floor the colours crowd and their spacing is no
+#   measure of how much the floor's own colour varies (with 12 colours and no minimum, a plain mat read half "hidden"
+#   once the sunlight moved on it)
+USUAL_SHARE = 0.7  # [-] a cell that showed floor in at least this share of the learnt frames usually shows floor
+# FLOOR_COLOURS, MATCH_PERCENTILE, USUAL_SHARE and MIN_RADIUS_LAB chosen on the 11 model-car sources of the development
+# corpus, each left out in turn (benchmarks/eval_floor.py; docs/learning.md, "The floor").
+
+
+@dataclass(frozen=True, eq=False)  # eq=False: holds arrays
+class FloorModel:
+    """What the floor looks like and where it usually is. Arrays are read-only."""
+
+    colours_lab: np.ndarray  # (k, 3) OpenCV 8-bit Lab colours of the floor
+    radius_lab: float  # [Lab units] a cell within this distance of a floor colour shows floor
+    usual: np.ndarray  # (FLOOR_PX[1], FLOOR_PX[0]) share of learnt frames in which the cell showed floor, 0..1
+    hidden_usual: float  # [0..1] median hidden-floor share on the recordings
+
+    def hidden(self, bgr: np.ndarray) -> float:
+        """Share of the usual floor that this picture (uint8 BGR) does not show as floor, 0..1."""
+        return self.hidden_in(floor_lab(bgr))
+
+    def hidden_in(self, lab: np.ndarray) -> float:
+        """The same for a ``floor_lab`` thumbnail."""
+        weight = np.where(self.usual >= USUAL_SHARE, self.usual, 0.0)
+        seen = floor_cells(self.colours_lab, self.radius_lab, lab)
+        return float((weight * ~seen).sum() / max(float(weight.sum()), 1e-9))
+
+
+def as_occlusion(hidden: float, usual: float, calm_top: float) -> float:
+    """A hidden-floor share as the occlusion cue: 0..usual maps onto the rule file's calm term (0..``calm_top``), the
+    rest linearly up to 1 (monotone, 0 and 1 fixed, NaN stays NaN). Even where the typical frame hides less than the
+    calm term's top, what hides more than it is read as more than calm: on a plain floor a wall hides a few per cent
+    of the usual floor more, and that must show in the fear."""
+    if not math.isfinite(hidden):
+        return hidden
+    usual = min(max(usual, 1e-3), 1.0 - 1e-3) if math.isfinite(usual) else 1e-3
+    return float(np.interp(hidden, [0.0, usual, 1.0], [0.0, calm_top, 1.0]))
+
+
+def floor_lab(bgr: np.ndarray) -> np.ndarray:
+    """The picture as a FLOOR_PX thumbnail in Lab (float32, H×W×3), area-averaged."""
+    small = cv2.resize(bgr, FLOOR_PX, interpolation=cv2.INTER_AREA)
+    return cv2.cvtColor(small, cv2.COLOR_BGR2LAB).astype(np.float32)
+
+
+def floor_cells(colours_lab: np.ndarray, radius_lab: float, lab: np.ndarray) -> np.ndarray:
+    """bool (H, W): cells within the radius of a floor colour (squared distances as |x|² − 2x·c + |c|²: one small matrix
+    product instead of an (H, W, k, 3) array of differences, ~10× faster)."""
+    x = lab.reshape(-1, 3).astype(np.float64)
+    c = np.asarray(colours_lab, dtype=np.float64)
+    d2 = (x * x).sum(axis=1)[:, None] - 2.0 * (x @ c.T) + (c * c).sum(axis=1)[None, :]
+    return (d2.min(axis=1) <= radius_lab * radius_lab).reshape(lab.shape[:2])
+
+
+def learn_floor(thumbs: Sequence[np.ndarray], *, colours: int = FLOOR_COLOURS, percentile: float = MATCH_PERCENTILE,
+                min_radius_lab: float = MIN_RADIUS_LAB) -> FloorModel | None:
+    """The floor model of learnt frames (``floor_lab`` thumbnails); None from fewer than two. The keywords are for
+    ``benchmarks/eval_floor.py``, which chose them."""
+    if len(thumbs) < 2:
+        return None
+    labs = np.stack(thumbs)
+    h, w = labs.shape[1:3]
+    patch = labs[:, int(NOSE_ROWS[0] * h): int(NOSE_ROWS[1] * h), int(NOSE_COLUMNS[0] * w): int(NOSE_COLUMNS[1] * w)]
+    pixels = np.ascontiguousarray(patch.reshape(-1, 3))
+    k = min(colours, len(pixels))
+    criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.5)
+    cv2.setRNGSeed(0)  # the same recordings give the same profile
+    _, _, centres = cv2.kmeans(pixels, k, None, criteria, 2, cv2.KMEANS_PP_CENTERS)
+    nearest = np.sqrt(((pixels[:, None, :] - centres[None]) ** 2).sum(axis=-1).min(axis=-1))
+    radius = max(float(np.percentile(nearest, percentile)), min_radius_lab)
+    usual = np.mean([floor_cells(centres, radius, lab) for lab in labs], axis=0)
+    colours = centres.astype(np.float64)
+    for a in (colours, usual):
+        a.setflags(write=False)
+    model = FloorModel(colours, radius, usual, math.nan)
+    hidden = np.array([model.hidden_in(lab) for lab in labs])
+    return FloorModel(colours, radius, usual, float(np.median(hidden)))
+

@@ -1,0 +1,155 @@
+"""The learnt floor (track/floor.py): what a wall, the edge of the course, a box or darkness hides of the floor the
+recordings showed — on pictures of many floors, tapes and sizes, and on the shared recordings."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from fearguard.errors import FileError
+from fearguard.track.floor import FLOOR_PX, as_occlusion, floor_lab, learn_floor
+from fearguard.track.learn import LearnOptions, learn_track
+from fearguard.track.profile import load_track, profile_from_arrays, save_track
+from fearguard.track.reading import floor_hidden, read_as_learnt
+
+ROBOCAR = "modelcar/robocar-ucsd-window/images"
+
+colour = st.tuples(st.integers(0, 255), st.integers(0, 255), st.integers(0, 255))
+
+
+def _course(rng: np.random.Generator, floor: tuple[int, int, int], tape: tuple[int, int, int], size: tuple[int, int],
+            wall: tuple[int, int, int], horizon: float) -> np.ndarray:
+    """A camera's view of a taped course: a wall above the horizon, a floor with sensor noise and light falling off
+    with distance, two tape lines meeting toward the horizon that sway as the car turns."""
+    w, h = size
+    img = np.empty((h, w, 3), np.float64)
+    img[:] = wall
+    top = int(horizon * h)
+    shade = np.linspace(0.85, 1.0, h - top)[:, None, None]
+    img[top:] = np.asarray(floor, np.float64) * shade
+    sway = rng.uniform(-0.15, 0.15) * w
+    for side in (-1, 1):
+        for v in range(top, h):
+            k = (v - top) / max(h - top, 1)
+            u = int(w / 2 + sway * (1 - k) + side * (0.05 + 0.4 * k) * w)
+            half = max(1, int(0.02 * w * (0.3 + k)))
+            img[v, max(0, u - half): max(0, min(w, u + half))] = tape
+    img += rng.normal(0.0, 3.0, img.shape)
+    return img.clip(0, 255).astype(np.uint8)
+
+
+def _far_enough(a: tuple[int, int, int], b: tuple[int, int, int]) -> bool:
+    return float(np.linalg.norm(np.subtract(a, b))) >= 80.0
+
+
+@settings(max_examples=25, deadline=None)
+@given(colour, colour, colour, st.sampled_from([(160, 120), (320, 240), (640, 360)]), st.floats(0.3, 0.5),
+       st.integers(0, 2**16))
+def test_a_wall_ahead_hides_the_floor_and_the_course_does_not(floor, tape, wall, size, horizon, seed):
+    rng = np.random.default_rng(seed)
+    if not (_far_enough(floor, wall) and _far_enough(floor, tape) and _far_enough(tape, wall)):
+        return  # a wall the colour of the floor or of its tape (tape lies on the floor ahead of the nose) is not seen
+    model = learn_floor([floor_lab(_course(rng, floor, tape, size, wall, horizon)) for _ in range(30)])
+    assert model is not None
+    again = [model.hidden(_course(rng, floor, tape, size, wall, horizon)) for _ in range(5)]
+    assert max(again) <= 0.2, again  # more of the same course: its floor is where it was
+    h = size[1]
+    facing = _course(rng, floor, tape, size, wall, horizon)
+    facing[: int(0.9 * h)] = wall  # a wall close ahead: floor only just in front of the nose
+    assert model.hidden(facing) >= 0.5
+    dark = (_course(rng, floor, tape, size, wall, horizon) * 0.3).astype(np.uint8)
+    dimmed = tuple(int(c * 0.3) for c in floor)  # darkened, the floor may look like its own tape: then it is still floor
+    if _far_enough(dimmed, floor) and _far_enough(dimmed, tape):
+        assert model.hidden(dark) >= 0.5
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(0.0, 1.0), st.floats(0.0, 1.0), st.one_of(st.floats(0.0, 1.0), st.just(math.nan)), st.floats(0.0, 0.5))
+def test_more_floor_hidden_is_never_less_occlusion_and_the_typical_frame_is_calm(a, b, usual, calm):
+    lo, hi = as_occlusion(min(a, b), usual, calm), as_occlusion(max(a, b), usual, calm)
+    assert 0.0 <= lo <= hi <= 1.0
+    assert as_occlusion(0.0, usual, calm) == 0.0 and as_occlusion(1.0, usual, calm) == pytest.approx(1.0)
+    if math.isfinite(usual) and 1e-3 <= usual <= 1.0 - 1e-3:
+        assert as_occlusion(usual, usual, calm) == pytest.approx(calm)
+    assert math.isnan(as_occlusion(math.nan, usual, calm))
+
+
+def test_too_little_to_learn_a_floor_from_is_no_model():
+    assert learn_floor([]) is None and learn_floor([floor_lab(np.zeros((120, 160, 3), np.uint8))]) is None
+
+
+@pytest.fixture(scope="module")
+def robocar(shared_data: Path):
+    return learn_track([shared_data / ROBOCAR], LearnOptions(stop="1300f", every=2)).profile
+
+
+def _frames(path: Path, start: int, stop: int, every: int) -> list[np.ndarray]:
+    from fearguard.replay.recordings import open_recording
+
+    return [f.image_bgr for f in open_recording(path).iter_frames(start, stop, every)]
+
+
+def test_on_a_real_track_a_box_over_the_lane_hides_the_floor_later_laps_do_not(robocar, shared_data):
+    floor = robocar.floor
+    assert floor is not None and 0.0 <= floor.hidden_usual <= 0.5
+    later = _frames(shared_data / ROBOCAR, 1350, 2550, 40)
+    plain = np.array([floor.hidden(f) for f in later])
+    assert np.median(plain) <= 2 * floor.hidden_usual + 0.05
+    # not white: this glossy mat shows the window's white light as floor, and a white box on it is floor to the model
+    for i, box in enumerate(((40, 160, 220), (30, 30, 200), (200, 90, 30), (20, 20, 20))):
+        boxed = []
+        for f in later[i::5]:
+            f = f.copy()
+            h, w = f.shape[:2]
+            f[h // 2:, w // 4: 3 * w // 4] = box
+            boxed.append(floor.hidden(f))
+        assert np.median(boxed) > np.median(plain) + 0.1, (box, boxed)
+
+
+def test_the_floor_raises_the_occlusion_never_lowers_it_and_unknown_stays_worst(robocar, shared_data):
+    frame = _frames(shared_data / ROBOCAR, 1400, 1401, 1)[0]
+    wall = frame.copy()
+    wall[: int(0.85 * wall.shape[0])] = (40, 160, 220)
+    facts: list[str] = []
+    for occ in (0.0, 0.3, 1.0):
+        assert floor_hidden(robocar, frame, occ, 0.1, facts) >= occ
+        assert floor_hidden(robocar, wall, occ, 0.1, facts) >= max(occ, 0.5)
+    assert any("floor" in f for f in facts)
+    assert math.isnan(floor_hidden(robocar, frame, math.nan, 0.1, []))
+    assert math.isnan(floor_hidden(robocar, None, 0.0, 0.1, []))
+    blind = replace(robocar, lane_confidence_median=0.0)
+    a = read_as_learnt(blind, wall, 0.0, 120.0, 1.0, (80.0, 180.0), 0.1)
+    assert a.occlusion >= 0.5 and any("floor" in f for f in a.facts)
+    assert read_as_learnt(replace(blind, floor=None), wall, 0.0, 120.0, 1.0, (80.0, 180.0), 0.1).occlusion == 0.0
+
+
+def test_the_floor_survives_its_file_and_old_profiles_load_without_one(robocar, tmp_path):
+    back = load_track(save_track(robocar, tmp_path / "t.npz"))
+    assert back.floor is not None and robocar.floor is not None
+    assert np.array_equal(back.floor.usual, robocar.floor.usual) and back.floor.radius_lab == robocar.floor.radius_lab
+    assert back.floor.hidden_usual == robocar.floor.hidden_usual
+    with np.load(tmp_path / "t.npz") as z:
+        data = {k: z[k] for k in z.files if not k.startswith("floor_")}
+    assert profile_from_arrays(data, "old.npz").floor is None
+
+
+@pytest.mark.parametrize(("key", "value"), [
+    ("floor_usual", np.zeros((3, 3))), ("floor_usual", np.full((FLOOR_PX[1], FLOOR_PX[0]), 2.0)),
+    ("floor_radius_lab", np.array(0.0)), ("floor_hidden_usual", np.array(1.5)), ("floor_colours_lab", np.zeros((0, 3))),
+    ("floor_colours_lab", np.full((2, 3), np.nan)), ("floor_radius_lab", None),
+])
+def test_a_wrong_floor_names_its_key(robocar, tmp_path, key, value):
+    with np.load(save_track(robocar, tmp_path / "ok.npz")) as z:
+        data = {k: z[k] for k in z.files}
+    if value is None:
+        del data[key]
+    else:
+        data[key] = value
+    with pytest.raises(FileError, match=key):
+        profile_from_arrays(data, "bad.npz")
