@@ -31,7 +31,7 @@ def read_as_learnt(profile: TrackProfile, frame: object, lane_confidence: float,
     """Familiarity of the frame; brightness with the learnt light band mapped onto the rule file's normal band; the lane
     confidence relative to what the camera's lane model reads on this track — or, where it never saw this track's
     guidance on the recordings, how like the learnt track the picture is (the only guidance measure that track has: the
-    occlusion, measured over that model's marking region, then counts through it and reads 0); otherwise the occlusion
+    camera's occlusion, measured over that model's marking region, then does not apply and reads 0); otherwise the occlusion
     relative to what normal driving on this track showed (``TrackProfile.occlusion_as_learnt``). With a floor model, the
     occlusion is at least the share of the usual floor hidden, read against the recordings (``floor_hidden``)."""
     fam, why = profile.familiarity(frame)
@@ -44,8 +44,8 @@ def read_as_learnt(profile: TrackProfile, frame: object, lane_confidence: float,
     seen = profile.lane_confidence_median
     if not (math.isfinite(seen) and seen >= LANE_SEEN):
         facts.append(f"track: the camera's lane model did not see this track's guidance on the recordings (median confidence "
-                     f"{seen:.2f}): the lane cue reads how like the learnt track the picture is ({fam:.2f}); occlusion, "
-                     f"measured over that model's marking region, counts through it too (0 here)")
+                     f"{seen:.2f}): the lane cue reads how like the learnt track the picture is ({fam:.2f}); the camera's "
+                     f"occlusion, measured over that model's marking region, does not apply")
         occ = floor_hidden(profile, frame, 0.0 if math.isfinite(fam) else fam, occlusion_calm, facts)
         return AsLearnt(fam, b, fam, occ, tuple(facts))
     lane = min(1.0, lane_confidence / seen) if math.isfinite(lane_confidence) else lane_confidence
