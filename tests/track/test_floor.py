@@ -153,3 +153,27 @@ def test_a_wrong_floor_names_its_key(robocar, tmp_path, key, value):
         data[key] = value
     with pytest.raises(FileError, match=key):
         profile_from_arrays(data, "bad.npz")
+
+
+@settings(max_examples=120, deadline=None)
+@given(st.dictionaries(st.sampled_from(["floor_colours_lab", "floor_radius_lab", "floor_usual", "floor_hidden_usual"]),
+                       st.one_of(st.none(), st.integers(-3, 300).map(np.array), st.text(max_size=5).map(np.array),
+                                 st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=6).map(np.array),
+                                 st.floats(-2.0, 300.0).map(lambda v: np.full((FLOOR_PX[1], FLOOR_PX[0]), v)),
+                                 st.floats(-2.0, 300.0).map(lambda v: np.full((3, 3), v))), max_size=4))
+def test_hostile_floor_arrays_in_a_good_profile_are_a_file_error_or_a_floor_never_a_crash(robocar, tmp_path_factory, changes):
+    with np.load(save_track(robocar, tmp_path_factory.mktemp("floor") / "ok.npz")) as z:
+        data = {k: z[k] for k in z.files}
+    for key, value in changes.items():
+        if value is None:
+            data.pop(key, None)
+        else:
+            data[key] = value
+    try:
+        profile = profile_from_arrays(data, "hostile.npz")
+    except FileError as err:
+        assert "hostile.npz" in str(err)
+        return
+    if profile.floor is not None:  # accepted: then it reads any picture into a share 0..1
+        share = profile.floor.hidden(np.zeros((120, 160, 3), np.uint8))
+        assert 0.0 <= share <= 1.0
