@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import cached_property
 
 import cv2
 import numpy as np
@@ -53,9 +54,17 @@ class FloorModel:
 
     def hidden_in(self, lab: np.ndarray) -> float:
         """The same for a ``floor_lab`` thumbnail."""
-        weight = np.where(self.usual >= USUAL_SHARE, self.usual, 0.0)
         seen = floor_cells(self.colours_lab, self.radius_lab, lab)
-        return float((weight * ~seen).sum() / max(float(weight.sum()), 1e-9))
+        return float((self._weight * ~seen).sum() / self._weight_sum)
+
+    @cached_property
+    def _weight(self) -> np.ndarray:
+        """The cells read: those that usually show floor, weighted by how usually (fixed per model, not per frame)."""
+        return np.where(self.usual >= USUAL_SHARE, self.usual, 0.0)
+
+    @cached_property
+    def _weight_sum(self) -> float:
+        return max(float(self._weight.sum()), 1e-9)
 
 
 def as_occlusion(hidden: float, usual: float, calm_top: float) -> float:
@@ -76,12 +85,17 @@ def floor_lab(bgr: np.ndarray) -> np.ndarray:
 
 
 def floor_cells(colours_lab: np.ndarray, radius_lab: float, lab: np.ndarray) -> np.ndarray:
-    """bool (H, W): cells within the radius of a floor colour (squared distances as |x|² − 2x·c + |c|²: one small matrix
-    product instead of an (H, W, k, 3) array of differences, ~10× faster)."""
-    x = lab.reshape(-1, 3).astype(np.float64)
-    c = np.asarray(colours_lab, dtype=np.float64)
+    """bool (H, W): cells within the radius of a floor colour."""
+    return (_nearest_d2(lab.reshape(-1, 3), colours_lab) <= radius_lab * radius_lab).reshape(lab.shape[:2])
+
+
+def _nearest_d2(points: np.ndarray, colours: np.ndarray) -> np.ndarray:
+    """Squared Lab distance of each point (N, 3) to its nearest colour, as |x|² − 2x·c + |c|²: one small matrix product
+    instead of an (N, k, 3) array of differences (~10× faster per frame); clipped at 0 against rounding."""
+    x = np.asarray(points, dtype=np.float64)
+    c = np.asarray(colours, dtype=np.float64)
     d2 = (x * x).sum(axis=1)[:, None] - 2.0 * (x @ c.T) + (c * c).sum(axis=1)[None, :]
-    return (d2.min(axis=1) <= radius_lab * radius_lab).reshape(lab.shape[:2])
+    return np.maximum(d2.min(axis=1), 0.0)
 
 
 def learn_floor(thumbs: Sequence[np.ndarray], *, colours: int = FLOOR_COLOURS, percentile: float = MATCH_PERCENTILE,
@@ -98,13 +112,11 @@ def learn_floor(thumbs: Sequence[np.ndarray], *, colours: int = FLOOR_COLOURS, p
     criteria = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 30, 0.5)
     cv2.setRNGSeed(0)  # the same recordings give the same profile
     _, _, centres = cv2.kmeans(pixels, k, None, criteria, 2, cv2.KMEANS_PP_CENTERS)
-    nearest = np.sqrt(((pixels[:, None, :] - centres[None]) ** 2).sum(axis=-1).min(axis=-1))
-    radius = max(float(np.percentile(nearest, percentile)), min_radius_lab)
+    radius = max(float(np.percentile(np.sqrt(_nearest_d2(pixels, centres)), percentile)), min_radius_lab)
     usual = np.mean([floor_cells(centres, radius, lab) for lab in labs], axis=0)
     colours = centres.astype(np.float64)
     for a in (colours, usual):
         a.setflags(write=False)
     model = FloorModel(colours, radius, usual, math.nan)
-    hidden = np.array([model.hidden_in(lab) for lab in labs])
-    return FloorModel(colours, radius, usual, float(np.median(hidden)))
+    return replace(model, hidden_usual=float(np.median([model.hidden_in(lab) for lab in labs])))
 
