@@ -5,7 +5,7 @@
 Observations (cue level and frame level, every field garbage of every type with some probability:
 text, bytes, bools, numpy bools, Decimal, Fraction, 0-d and 1-D arrays, huge and non-finite floats,
 integers of hundreds of digits, objects whose ``__float__``/``__repr__``/``__str__`` raise; steering
-functions that raise, return garbage, or return numbers out of range; times that stall, jump or go
+functions that raise, return garbage, or return numbers beyond the steering range (held at full lock, said); times that stall, jump or go
 back) and file mutants (rule TOML, scenario TOML, sensor-log CSV and JSONL, Donkey tub manifest and
 catalog JSON: lines deleted, duplicated, swapped, numbers replaced by huge/odd ones, deep nesting,
 truncation, bytes flipped or not UTF-8, wide rules, typos in keys).
@@ -154,15 +154,21 @@ class Tally:
         }
 
 
+BEYOND_LOCK = "beyond lock"  # _steering's answer for a finite angle beyond the range: no fault, a reason
+
+
 @dataclass
 class Injected:
     """What the generator did to one observation, for the oracle."""
 
     fault: str = ""  # a fault the supervisor must answer with EMERGENCY/STOP
     non_number_cues: tuple[int, ...] = ()  # cue fields given as non-numbers
+    beyond_lock: bool = False  # the steering function answered a finite angle beyond the range: held at full lock, said
 
 
 def _steering(r: random.Random, max_deg: float) -> tuple[Callable[[object], object], str]:
+    """A steering function and what it does: "" (a fine angle), "beyond lock" (a finite angle beyond the range, held at
+    full lock: no fault) or the fault the supervisor must report."""
     roll = r.random()
     if roll < 0.8:
         value = r.uniform(-max_deg, max_deg)
@@ -170,8 +176,9 @@ def _steering(r: random.Random, max_deg: float) -> tuple[Callable[[object], obje
     if roll < 0.87:
         value = garbage(r)
         v = reading(value)  # a reading of exactly 0 is a fine angle (not falsy garbage)
-        ok = v is not None and math.isfinite(v) and abs(v) <= max_deg
-        return (lambda frame: value), "" if ok else "steering garbage"
+        if v is None or not math.isfinite(v):
+            return (lambda frame: value), "steering garbage"
+        return (lambda frame: value), BEYOND_LOCK if abs(v) > max_deg else ""
     if roll < 0.93:
         exc = r.choice([ValueError("bad"), ZeroDivisionError(), Unprintable(), MemoryError(), RecursionError()])
 
@@ -180,7 +187,7 @@ def _steering(r: random.Random, max_deg: float) -> tuple[Callable[[object], obje
 
         return raising, "steering raised"
     value = r.choice([1.0, -1.0]) * r.uniform(max_deg * 1.01, max_deg * 10)
-    return (lambda frame: value), "steering out of range"
+    return (lambda frame: value), BEYOND_LOCK
 
 
 def _frame(r: random.Random, rng: np.random.Generator) -> object:
@@ -310,6 +317,8 @@ def judge(cmd: object, vehicle: fg.VehicleLimits, injected: Injected, tally: Tal
             tally.bad(tally.unsafe, f"injected fault not reported ({injected.fault})", "; ".join(reasons)[:160])
     if faulted and not (cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP and limit == 0.0):
         tally.bad(tally.unsafe, "fault not answered by EMERGENCY/STOP", f"{cmd.mode} {cmd.strategy} {limit}")
+    if not faulted and injected.beyond_lock and not any("held at full lock" in r for r in reasons):
+        tally.bad(tally.unsafe, "steering beyond the range held without a reason", "; ".join(reasons)[:160])
     if not faulted:
         values = cmd.cues.values()
         for i in injected.non_number_cues:
@@ -351,7 +360,9 @@ def run_observations(n: int, seed: int, tally: Tally) -> None:
         clock: float | None = None
         for _ in range(min(r.randint(*EPISODE_STEPS), n - done)):
             obs, clock, injected = observation(r, rng, clock, with_frames)
-            if steer_fault and not injected.fault and isinstance(obs, fg.Observation):
+            if steer_fault == BEYOND_LOCK:
+                injected.beyond_lock = True
+            elif steer_fault and not injected.fault and isinstance(obs, fg.Observation):
                 injected.fault = steer_fault
             try:
                 cmd = guard.step(obs)  # type: ignore[arg-type]

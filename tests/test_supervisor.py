@@ -7,9 +7,12 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import fearguard as fg
 from fearguard.policy import ModeState, PolicyConfig, emergency_plan, envelope_speed_mps, imminent_collision, stopping_distance_m
+from fearguard.vehicle import PRESETS
 
 CAR = fg.VehicleLimits.preset("model_car")  # the 1:10 car with an HC-SR04 and QR localisation (cue-level tests use every cue)
 
@@ -206,7 +209,6 @@ def test_envelope_math() -> None:
         (lambda f: "left", "not a finite number"),
         (lambda f: None, "not a finite number"),
         (lambda f: True, "not a finite number"),
-        (lambda f: 45.0, "outside ±30.0 deg"),
     ],
 )
 def test_faulty_steering_function_gives_a_safe_stop(rules, steer, fault) -> None:
@@ -218,6 +220,22 @@ def test_faulty_steering_function_gives_a_safe_stop(rules, steer, fault) -> None
     assert cmd.mode is fg.Mode.EMERGENCY and cmd.strategy is fg.Strategy.STOP and cmd.speed_limit_mps == 0.0
     assert fault in cmd.reasons[0] and cmd.steering_deg == 4.0
     assert cmd.fear == pytest.approx(rules.evaluate(CALM).fear)
+
+
+@settings(max_examples=60, deadline=None)
+@given(preset=st.sampled_from(sorted(PRESETS)), over=st.floats(1.0001, 5.0), sign=st.sampled_from([1.0, -1.0]))
+def test_an_angle_beyond_the_steering_range_is_held_at_full_lock_not_a_fault(rules, preset, over, sign) -> None:
+    """Invariant 7's physical limit: the wheels stop at full lock (a route beyond it is clipped the same way), and the
+    reasons say so on every frame it binds; the drive goes on in NORMAL instead of an EMERGENCY STOP."""
+    car = fg.VehicleLimits.preset(preset)
+    asked = sign * over * car.max_steering_deg
+    guard = fg.FearGuard(lambda f: asked, rules=rules, vehicle=car)
+    cmds = drive(guard, CALM, 0.0, 1.0)
+    lock = math.copysign(car.max_steering_deg, asked)
+    assert all(c.mode is not fg.Mode.EMERGENCY for c in cmds)
+    assert cmds[-1].steering_deg == pytest.approx(lock)
+    assert all(any(f"held at full lock {lock:+.1f} deg" in r for r in c.reasons) for c in cmds)
+    assert all(abs(c.steering_deg) <= car.max_steering_deg for c in cmds)
 
 
 def test_numpy_steering_values_are_accepted(rules) -> None:
@@ -333,7 +351,7 @@ def test_policy_defaults_are_safe() -> None:
 
 
 def test_a_fault_latches_stop_until_emergency_is_left(rules) -> None:
-    outputs = iter([45.0] + [1.0] * 100)
+    outputs = iter([math.nan] + [1.0] * 100)
     guard = fg.FearGuard(lambda f: next(outputs), rules=rules, vehicle=CAR)
     assert guard.step(fg.Observation(t_s=0.0, cues=CALM)).strategy is fg.Strategy.STOP
     held = drive(guard, STALE, 0.1, 1.5)  # localisation alone would crawl, but the fault still latches STOP

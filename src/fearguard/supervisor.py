@@ -199,7 +199,7 @@ class FearGuard:
         stall = self._watchdog(t)
         cues, cue_notes, perceived, lead = self._cues(obs)
         result = self.rules.evaluate(cues)
-        steering, steer_fault = self._steering(obs, perceived)
+        steering, steer_fault = self._steering(obs, perceived, cue_notes)
         fault = stall or steer_fault or self._oscillation(steering)
         if fault:
             return self._fault_command(obs, fault, t, cues, result, perceived)
@@ -265,11 +265,11 @@ class FearGuard:
                          f"(has_ultrasonic = false): counted")
         return clamp_to_sensor(range_m, v, notes)
 
-    def _steering(self, obs: Observation, perceived: Perceived | None) -> tuple[float, str]:
+    def _steering(self, obs: Observation, perceived: Perceived | None, notes: list[str]) -> tuple[float, str]:
         """The wrapped estimator's angle: given in the observation (the caller holds it), else from this frame's analysis
         for a FrameSteering, else the steering function on the frame — each validated the same way."""
         if obs.steering_deg is not None:
-            return self._validated(obs.steering_deg, "the given steering_deg")
+            return self._validated(obs.steering_deg, "the given steering_deg", notes)
         if self.steer is None:
             return 0.0, "fault: no steering: give Observation.steering_deg or a steering function"
         analysis = perceived.analysis if perceived is not None else None
@@ -286,17 +286,20 @@ class FearGuard:
                 raw = call(arg)
         except Exception as exc:  # the wrapped estimator is foreign code: any failure is a fault
             return 0.0, f"fault: steering function raised {describe_exception(exc)}"
-        return self._validated(raw, "steering function returned")
+        return self._validated(raw, "steering function returned", notes)
 
-    def _validated(self, raw: object, what: str) -> tuple[float, str]:
-        """A finite angle within the vehicle's steering range, or a fault saying what arrived."""
+    def _validated(self, raw: object, what: str, notes: list[str]) -> tuple[float, str]:
+        """A finite angle, held within the vehicle's steering range (a note says so: the wheels stop at full lock, as a
+        route beyond it is clipped — invariant 7's physical limit), or a fault saying what arrived."""
         value = finite_reading(raw)
         if value is None:
             says = f"{what} {describe(raw)}" if what.endswith("returned") else f"{what} is {describe(raw)}"
             return 0.0, f"fault: {says}, not a finite number"
         limit = self.vehicle.max_steering_deg
         if abs(value) > limit:
-            return 0.0, f"fault: steering {value:+.1f} deg outside ±{limit:.1f} deg"
+            held = math.copysign(limit, value)
+            notes.append(f"steering {value:+.1f} deg beyond the ±{limit:.1f} deg range: held at full lock {held:+.1f} deg")
+            return held, ""
         return value, ""
 
     def _route(self, obs: Observation, notes: list[str]) -> float | None:

@@ -100,12 +100,9 @@ def _steer_fault(answer: Any, vehicle: fg.VehicleLimits) -> str | None:
         return None
     if isinstance(answer, SteerRaises):
         return f"the steering function raised {answer.exception}"
-    value = finite_reading(answer)
-    if value is None:
+    if finite_reading(answer) is None:
         return f"the steering function returned {answer!r}"
-    if abs(value) > vehicle.max_steering_deg:
-        return f"the steering function returned {value:+.4g} deg, beyond ±{vehicle.max_steering_deg:g} deg"
-    return None
+    return None  # a finite angle beyond the range is no fault: the wheels stop at full lock (check_pass_through)
 
 
 def _first_bad_frame(subject: Subject, case: Case, judge: Callable[[Step, fg.Command], str | None]) -> str | None:
@@ -537,9 +534,10 @@ RATE_WORDS = ("rate", "limit")  # a reason naming the physical limit that change
 
 def check_pass_through(subject: Subject, case: Case) -> str | None:
     """At very low fear in NORMAL the wrapped steering angle is returned unchanged (PASS_THROUGH), unless the
-    steering-rate limit binds: then the change is the smallest that respects it (the angle moved exactly
-    max_steering_rate_dps × dt toward it), with a reason. A steady drive through the calmest picture does
-    reach very low fear in NORMAL (else the check would be vacuous)."""
+    a physical limit binds: an angle beyond the steering range is held at full lock, and the steering-rate limit
+    moves the angle exactly max_steering_rate_dps × dt toward that — the smallest change that respects both — with a
+    reason. A steady drive through the calmest picture does reach very low fear in NORMAL (else the check would be
+    vacuous)."""
     history = case.run("drive")
     r = run(subject, history)
     if r.raised:
@@ -552,6 +550,10 @@ def check_pass_through(subject: Subject, case: Case) -> str | None:
             wanted = finite_reading(raw)
             if cmd.strategy is not fg.Strategy.PASS_THROUGH or wanted is None:
                 return f"frame {i}: NORMAL at VERY_LOW fear, the steering function said {raw!r} deg but the command is {_cmd_text(cmd)}"
+            lock = subject.vehicle.max_steering_deg
+            if abs(wanted) > lock and not any("full lock" in reason for reason in cmd.reasons):
+                return f"frame {i}: the steering function said {wanted!r} deg, beyond ±{lock:g} deg, and no reason says so"
+            wanted = min(max(wanted, -lock), lock)
             if cmd.steering_deg != wanted:
                 prev = r.commands[i - 1].steering_deg if i else None
                 why = _rate_limited(wanted, cmd, prev, None if t is None or last_t is None else t - last_t, rate)
@@ -700,7 +702,7 @@ def _recovery_cases(subject: Subject) -> st.SearchStrategy[Case]:
 # -- 10. the watchdog -----------------------------------------------------------------------------
 def check_watchdog(subject: Subject, case: Case) -> str | None:
     """Stale or broken input is a fault for that frame: EMERGENCY/STOP with a zero limit when time does not
-    increase (or is not a number) or the steering function fails (raises, NaN, not a number, beyond its limit)."""
+    increase (or is not a number) or the steering function fails (raises, NaN, not a number)."""
     car = subject.vehicle
     for _, history in case.runs:
         r = run(subject, history)

@@ -179,14 +179,17 @@ def speeds(vehicle: fg.VehicleLimits | None = None, *, unknown: bool = True) -> 
 
 
 def steering_outputs(vehicle: fg.VehicleLimits | None = None, *, faults: bool = True) -> SearchStrategy[Any]:
-    """What a wrapped steering function answers: angles within the limit, and (``faults``) beyond it, NaN, junk, raising."""
+    """What a wrapped steering function answers: angles within the limit, now and then beyond it (held at full lock,
+    no fault), and (``faults``) NaN, junk, raising."""
     limit = _vehicle(vehicle).max_steering_deg
     fine = st.floats(-limit, limit)
+    beyond = st.builds(math.copysign, st.floats(limit, 3 * limit, exclude_min=True), st.sampled_from([1.0, -1.0]))
+    angles = st.one_of(fine, fine, fine, fine, beyond)
     if not faults:
-        return fine
+        return angles
     junk = st.sampled_from(["left", None, SteerRaises(), SteerRaises("ValueError")])
-    bad = st.one_of(st.floats(allow_nan=True, allow_infinity=True), junk, non_numbers(), st.floats(limit, 10 * limit, exclude_min=True))
-    return st.one_of(fine, fine, fine, fine, bad)
+    bad = st.one_of(st.floats(allow_nan=True, allow_infinity=True), junk, non_numbers())
+    return st.one_of(angles, angles, angles, bad)
 
 
 def leads(*, boxes: bool = True) -> SearchStrategy[Any]:
