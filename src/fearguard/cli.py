@@ -394,6 +394,11 @@ def _print_replay_summary(summary: dict, out_dir: object) -> None:
         print(f"  fear ≥ MEDIUM {st['start_t_s']:.2f}–{st['end_t_s']:.2f} s, peak {st['peak_fear']:.2f}: {'; '.join(st.get('why', []))}")
     if summary.get("stopped_early"):
         print(f"note: {summary['stopped_early']}")
+    if summary.get("recording_pauses"):
+        pauses = summary["recording_pauses"]
+        longest = max(pauses, key=lambda p: p["paused_s"])
+        print(f"note: {len(pauses)} recording pause(s) (a Donkey tub records only while the car drives): the supervisor "
+              f"started afresh after each; longest {longest['paused_s']:.1f} s before frame {longest['frame']}")
     if summary.get("skipped"):
         print(f"note: {len(summary['skipped'])} frame(s) skipped, first: {summary['skipped'][0]['reason']}")
     for issue in summary.get("sensor_log_issues", [])[:10]:

@@ -1,7 +1,9 @@
 """ROS bags in (issue 37): real bags written by rosbags' writers of both generations, read back through fearguard.
 
 Frames equal the images written, byte for byte, wherever the encoding is lossless; sensors are aligned like a sensor
-log; a Donkey tub written as a ROS 1 bag and as a ROS 2 MCAP bag, with its own stamps, replays row for row like the tub.
+log; a Donkey tub written as a ROS 1 bag and as a ROS 2 MCAP bag, with its own stamps, replays row for row like the tub
+up to the tub's first recording pause (a fresh start in a tub, a stall in a bag), the same pictures at the same times
+after it.
 """
 
 from __future__ import annotations
@@ -274,8 +276,15 @@ def _tub_and_bags_replay_alike(shared_data: Path, tmp_path: Path, stop: int | No
         assert main(["replay", str(bag), "--out", str(out), "--no-plots"]) == 0
         rows = _rows(out)
         assert len(rows) == len(tub_rows), generation
-        for tub_row, row in zip(tub_rows, rows, strict=True):
+        # a tub records only while the car drives, so its gaps are pauses (a fresh start); a bag's are stalls (faults):
+        # row for row alike up to the first pause, and after it the same pictures at the same times, the pauses stalls
+        pauses = [k for k, r in enumerate(tub_rows) if "resumed_after_s" in r]
+        first = pauses[0] if pauses else len(rows)
+        for tub_row, row in zip(tub_rows[:first], rows[:first], strict=True):
             assert {k: row[k] for k in CUE_AND_COMMAND} == {k: tub_row[k] for k in CUE_AND_COMMAND}, (generation, tub_row["frame"])
+        assert [(r["t_s"], r["brightness"]) for r in rows] == [(r["t_s"], r["brightness"]) for r in tub_rows], generation
+        assert [k for k, r in enumerate(rows) if "input stalled" in r["reasons"][0]] == pauses, generation
+        assert not any("stalled" in reason for r in tub_rows for reason in r["reasons"])
         assert [r["source_frame"] for r in rows] == stamps  # the bag stamp of each picture, in ns
 
 

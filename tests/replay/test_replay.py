@@ -76,22 +76,28 @@ def test_an_image_folder_replays_in_name_order(shared_data: Path, tmp_path: Path
     assert result.summary["kind"] == "images"
 
 
-def test_a_donkey_tub_replays_with_its_recorded_angles(shared_data: Path, tmp_path: Path):
-    tub = tmp_path / "tub"
+def _write_tub(tub: Path, image: np.ndarray, stamps_ms: list[float], deleted: list[int] = ()) -> Path:
+    """A Donkey tub (manifest, catalog, images) of ``image`` at these clock stamps; record i: angle 0.1 i, throttle 0.3."""
     (tub / "images").mkdir(parents=True)
     inputs, types = ["cam/image_array", "user/angle", "user/throttle", "user/mode"], ["image_array", "float", "float", "str"]
     lines = []
-    for i in range(6):
-        cv2.imwrite(str(tub / "images" / f"{i}_cam_image_array_.jpg"), _still(shared_data))
-        lines.append(json.dumps({"_index": i, "_session_id": "s", "_timestamp_ms": 1000 + 50 * i,
+    for i, stamp in enumerate(stamps_ms):
+        cv2.imwrite(str(tub / "images" / f"{i}_cam_image_array_.jpg"), image)
+        lines.append(json.dumps({"_index": i, "_session_id": "s", "_timestamp_ms": stamp,
                                  "cam/image_array": f"{i}_cam_image_array_.jpg", "user/angle": 0.1 * i, "user/throttle": 0.3,
                                  "user/mode": "user"}))
     (tub / "catalog_0.catalog").write_text("\n".join(lines) + "\n")
     (tub / "catalog_0.catalog_manifest").write_text(json.dumps({"path": "catalog_0.catalog", "created_at": 0, "line_lengths": [],
                                                                 "start_index": 0}) + "\n")
     manifest = [json.dumps(inputs), json.dumps(types), json.dumps({}), json.dumps({"created_at": 0}),
-                json.dumps({"paths": ["catalog_0.catalog"], "current_index": 6, "max_len": 1000, "deleted_indexes": [2]})]
+                json.dumps({"paths": ["catalog_0.catalog"], "current_index": len(stamps_ms), "max_len": 1000,
+                            "deleted_indexes": list(deleted)})]
     (tub / "manifest.json").write_text("\n".join(manifest) + "\n")
+    return tub
+
+
+def test_a_donkey_tub_replays_with_its_recorded_angles(shared_data: Path, tmp_path: Path):
+    tub = _write_tub(tmp_path / "tub", _still(shared_data), [1000 + 50 * i for i in range(6)], deleted=[2])
     result = replay(tub, tmp_path / "out", ReplayOptions(plots=False))
     records = read_jsonl(tmp_path / "out" / "log.jsonl")
     assert [r["frame"] for r in records] == [0, 1, 3, 4, 5]
@@ -100,6 +106,56 @@ def test_a_donkey_tub_replays_with_its_recorded_angles(shared_data: Path, tmp_pa
     units = result.summary["log_field_units"]  # the tub's channels only (no pilot/* in this one), units and sign said
     assert set(units) == {"user_angle_donkey", "user_throttle_donkey", "user_mode_donkey"}
     assert "-1 = full left, + = right" in units["user_angle_donkey"]
+    assert result.summary["recording_pauses"] == []  # a deleted record is 0.1 s: no pause
+
+
+def test_a_real_tubs_throttle_pause_is_a_fresh_start_not_a_stalled_camera(shared_data: Path, tmp_path: Path, capsys):
+    """donkey-carpet-dark stops recording for 1.15 s before record 1487 (the throttle fell from 0.5 to 0.16 and comes
+    back at 0.04: Donkey records only while the car drives). Replayed, that is no stall fault: the supervisor starts
+    afresh there, the log and the summary say so; the same frames read as a 10 Hz image folder have no pause at all."""
+    tub = shared_data / "modelcar" / "donkey-carpet-dark"
+    out = tmp_path / "out"
+    assert main(["replay", str(tub), "--vehicle", "donkey", "--from", "1478f", "--to", "1496f", "--out", str(out), "--no-plots"]) == 0
+    assert "1 recording pause(s)" in capsys.readouterr().out
+    records = read_jsonl(out / "log.jsonl")
+    resumed = [r for r in records if "resumed_after_s" in r]
+    assert [r["frame"] for r in resumed] == [1487] and resumed[0]["resumed_after_s"] == pytest.approx(1.154, abs=1e-3)
+    assert not any("stalled" in reason for r in records for reason in r["reasons"])
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["recording_pauses"] == [{"frame": 1487, "paused_s": pytest.approx(1.154, abs=1e-3)}]
+
+
+@pytest.mark.parametrize(("gap_s", "pause"), [(0.3, False), (0.95, False), (1.2, True), (45.0, True), (600.0, True)])
+def test_a_tub_gap_longer_than_the_watchdog_is_a_pause_and_resets_the_supervisor(shared_data: Path, tmp_path: Path,
+                                                                                  gap_s: float, pause: bool):
+    """20 Hz records with one gap after record 9: beyond the watchdog's 1 s (max(10 periods, 1 s)) it is a pause, the
+    supervisor starting afresh (its speed limit ramps up from standing again); within it, the drive simply goes on."""
+    stamps = [50.0 * i + (1000.0 * gap_s if i >= 10 else 0.0) for i in range(20)]
+    tub = _write_tub(tmp_path / "tub", _still(shared_data), stamps)
+    result = replay(tub, tmp_path / "out", ReplayOptions(plots=False))
+    records = read_jsonl(tmp_path / "out" / "log.jsonl")
+    assert not any(reason.startswith("fault") for r in records for reason in r["reasons"])
+    assert [p["frame"] for p in result.summary["recording_pauses"]] == ([10] if pause else [])
+    assert ("resumed_after_s" in records[10]) is pause
+    if pause:
+        assert records[10]["speed_limit_mps"] <= records[0]["speed_limit_mps"] + 1e-9  # a fresh ramp, as at the start
+
+
+def test_a_gap_in_a_recording_that_is_no_tub_stays_a_stall(shared_data: Path, tmp_path: Path):
+    """A bag or a video has no throttle-gated recorder: a long gap there is the car's own stall, a fault (the watchdog)."""
+    import fearguard as fg
+    from fearguard.drive.controllers import Guarded
+    from fearguard.replay.run import RecordingWorld
+    from fearguard.replay.sources import Frame
+
+    image = _still(shared_data)
+    frames = iter([Frame(k, 0.05 * k + (3.0 if k >= 5 else 0.0), image, {}) for k in range(8)])
+    world, guarded = RecordingWorld(frames, 20.0, None, 1.0), Guarded(fg.FearGuard(fg.HoughLaneSteering()))
+    reasons = []
+    while (sensed := world.sense()) is not None:
+        assert sensed.resumed_after_s is None
+        reasons.append(guarded.decide(sensed).command.reasons[0])
+    assert "input stalled" in reasons[5] and world.pauses == []
 
 
 def test_a_sensor_log_with_an_approaching_obstacle_drives_fear_and_the_limit(shared_data: Path, tmp_path: Path):

@@ -30,6 +30,8 @@ class Guarded:
         self.cruise_mps = cruise_mps
 
     def decide(self, sensed: Sensed) -> Decision:
+        if sensed.resumed_after_s is not None:  # a recording's pause: the car stood meanwhile, its supervisor starts afresh
+            self.guard.reset()
         cmd = self.guard.step(sensed.observation)
         analysis = cmd.perceived.analysis if cmd.perceived is not None else None
         return Decision(cmd.steering_deg, min(self.cruise_mps, cmd.speed_limit_mps), cmd, analysis)

@@ -31,6 +31,7 @@ class Sensed:
     t_s: float
     observation: Observation
     image: np.ndarray | None = None  # what the annotated video draws on (None: the world renders nothing)
+    resumed_after_s: float | None = None  # [s] a recording resumes after a pause this long: nothing before continues here
 
 
 @dataclass(frozen=True)

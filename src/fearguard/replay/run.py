@@ -6,6 +6,12 @@ out folder, through ``recorder.Recorder``: ``log.jsonl`` (one flushed line per f
 ``timeline.png`` and, if asked, the annotated video (``annotated.mp4``; ``annotated.avi`` without PyAV).
 Sensors are what the recording has: the car has an ultrasonic when the sensor log has a range or echo
 column (unless ``no_ultrasonic``), QR localisation when asked.
+
+A Donkey tub records only while the car drives (Donkey's ``AUTO_RECORD_ON_THROTTLE``, on by default: no record while
+the throttle is 0), so a gap in its clock longer than the supervisor's watchdog allows is a **pause**, not a stalled
+camera: the car stood while nothing was recorded. The supervisor starts afresh at the frame after it (as a car that
+has been standing), the log gives that frame ``resumed_after_s`` and the summary lists the pauses. Live, the Donkey
+part sees every frame of the loop and its watchdog stays the judge of stalls; in a bag or a video a gap is a stall.
 """
 
 from __future__ import annotations
@@ -26,6 +32,7 @@ from fearguard.fuzzy.loader import load_rules
 from fearguard.observation import LeadBox, Observation
 from fearguard.outputs.recorder import CommandStats, Recorder
 from fearguard.outputs.report import json_value
+from fearguard.policy.speed import watchdog_s
 from fearguard.replay.bags import BagSource, BagTopics
 from fearguard.replay.pitch import PitchCheck
 from fearguard.replay.read_ahead import read_ahead, usable_cores
@@ -97,7 +104,9 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     frames = source.iter_frames(start, stop_at, options.every)
     ahead = options.read_ahead if options.read_ahead is not None else usable_cores() > 1
     pitch = PitchCheck(camera)
-    world = RecordingWorld(read_ahead(frames) if ahead else frames, source.fps / options.every, log_data, options.speed_mps, pitch)
+    pause_s = watchdog_s(options.every / source.fps, guard.rules.policy) if source.kind == "tub" else None
+    world = RecordingWorld(read_ahead(frames) if ahead else frames, source.fps / options.every, log_data, options.speed_mps, pitch,
+                           pause_s)
     began = time.perf_counter()
     recorder = Recorder(out, fps=world.fps, video=options.video, mcap=options.mcap)
     ran = run(world, Guarded(guard), recorder, stop=stop, on_frame=on_frame, total=expected)  # closing the world stops the reader
@@ -110,6 +119,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
         source=str(source_path), kind=source.kind, fps=source.fps, expected_frames=source.expected_frames,
         selected_frames=expected, processed_frames=done, processing_fps=done / elapsed if elapsed > 0 else None, interrupted=interrupted,
         skipped=[{"frame": s.index, "reason": s.reason} for s in source.skipped], stopped_early=source.stopped_early,
+        recording_pauses=[{"frame": index, "paused_s": gap} for index, gap in world.pauses],
         source_notes=list(source.notes), log_field_units=dict(source.log_field_units),
         vehicle={"has_ultrasonic": has_us, "has_qr_localisation": options.qr_localisation},
         sensor_log_issues=[{"line": i.line, "problem": i.problem} for i in log_data.issues] if log_data else [],
@@ -154,25 +164,37 @@ def _expected(total: int | None, start: int, stop: int | None, every: int) -> in
 class RecordingWorld:
     """A recording as a ``World``: its frames with the sensor readings of their times (a sensor log, or a bag's own
     topics); ``act`` moves nothing (open loop: the recording's motion is fixed) but checks the camera's pitch against
-    the lane lines. Closing it stops the reader and closes the source."""
+    the lane lines. ``pause_s``: a gap longer than this between frames is a pause of the recording (``pauses``: frame,
+    seconds), the next frame ``Sensed.resumed_after_s``; None: every gap is the car's own (a stall, if long). Closing it
+    stops the reader and closes the source."""
 
     def __init__(self, frames: Iterator[Frame], fps: float, log: Readings | None, speed_mps: float | None,
-                 pitch: PitchCheck | None = None) -> None:
-        self.frames, self.fps, self.log, self.speed_mps, self.pitch = frames, fps, log, speed_mps, pitch
+                 pitch: PitchCheck | None = None, pause_s: float | None = None) -> None:
+        self.frames, self.fps, self.log, self.speed_mps, self.pitch, self.pause_s = frames, fps, log, speed_mps, pitch, pause_s
+        self.pauses: list[tuple[int, float]] = []
         self._frame: Frame | None = None
+        self._last_t_s: float | None = None
 
     def sense(self) -> Sensed | None:
         frame = self._frame = next(self.frames, None)
         if frame is None:
             return None
-        return Sensed(frame.index, frame.t_s, _observation(frame.t_s, frame.image_bgr, self.log, self.speed_mps), frame.image_bgr)
+        gap = frame.t_s - self._last_t_s if self._last_t_s is not None else 0.0
+        self._last_t_s = frame.t_s
+        resumed = gap if self.pause_s is not None and gap > self.pause_s else None
+        if resumed is not None:
+            self.pauses.append((frame.index, resumed))
+        obs = _observation(frame.t_s, frame.image_bgr, self.log, self.speed_mps)
+        return Sensed(frame.index, frame.t_s, obs, frame.image_bgr, resumed)
 
     def act(self, sensed: Sensed, decision: Decision) -> Outcome:
         frame = self._frame
         assert frame is not None  # act follows the sense that read it
         if self.pitch is not None:
             self.pitch.add(frame.t_s, decision.analysis, (frame.image_bgr.shape[1], frame.image_bgr.shape[0]))
-        return Outcome({"source_frame": frame.source_frame, **frame.log_fields}, f"t {sensed.t_s:.1f} s", stamp_ns=frame.stamp_ns)
+        resumed = {} if sensed.resumed_after_s is None else {"resumed_after_s": sensed.resumed_after_s}
+        return Outcome({"source_frame": frame.source_frame, **resumed, **frame.log_fields}, f"t {sensed.t_s:.1f} s",
+                       stamp_ns=frame.stamp_ns)
 
     def close(self) -> None:
         close = getattr(self.frames, "close", None)
