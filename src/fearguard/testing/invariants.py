@@ -95,7 +95,7 @@ def _is_fault(cmd: fg.Command) -> bool:
     return cmd.cause is None and cmd.mode is fg.Mode.EMERGENCY
 
 
-def _steer_fault(answer: Any, vehicle: fg.VehicleLimits) -> str | None:
+def _steer_fault(answer: Any) -> str | None:
     if answer is NOT_CALLED:
         return None
     if isinstance(answer, SteerRaises):
@@ -533,8 +533,8 @@ RATE_WORDS = ("rate", "limit")  # a reason naming the physical limit that change
 
 
 def check_pass_through(subject: Subject, case: Case) -> str | None:
-    """At very low fear in NORMAL the wrapped steering angle is returned unchanged (PASS_THROUGH), unless the
-    a physical limit binds: an angle beyond the steering range is held at full lock, and the steering-rate limit
+    """At very low fear in NORMAL the wrapped steering angle is returned unchanged (PASS_THROUGH), unless a
+    physical limit binds: an angle beyond the steering range is held at full lock, and the steering-rate limit
     moves the angle exactly max_steering_rate_dps × dt toward that — the smallest change that respects both — with a
     reason. A steady drive through the calmest picture does reach very low fear in NORMAL (else the check would be
     vacuous)."""
@@ -703,7 +703,6 @@ def _recovery_cases(subject: Subject) -> st.SearchStrategy[Case]:
 def check_watchdog(subject: Subject, case: Case) -> str | None:
     """Stale or broken input is a fault for that frame: EMERGENCY/STOP with a zero limit when time does not
     increase (or is not a number) or the steering function fails (raises, NaN, not a number)."""
-    car = subject.vehicle
     for _, history in case.runs:
         r = run(subject, history)
         if r.raised:
@@ -717,7 +716,7 @@ def check_watchdog(subject: Subject, case: Case) -> str | None:
             elif last_t is not None and t <= last_t:
                 why = f"time did not increase ({last_t:.4g} s → {t:.4g} s)"
             else:
-                why = _steer_fault(raw, car)
+                why = _steer_fault(raw)
             if why and not _stopped(cmd):
                 return f"frame {i}: {why}, but the command is {_cmd_text(cmd)}"
             if t is not None:
