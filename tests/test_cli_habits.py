@@ -127,6 +127,31 @@ def test_suite_prints_totals_and_keeps_supervisor_checks_apart(tmp_path: Path, c
                                                                      "crisp": ["no_emergency"], "aeb": ["no_emergency"]}
 
 
+def test_a_suite_of_one_controller_runs_and_tables_only_it(tmp_path: Path, capsys) -> None:
+    folder = tmp_path / "scenarios"
+    folder.mkdir()
+    (folder / "short.toml").write_text(SHORT + "no_emergency = true\n")
+    argv = ["suite", str(folder), "--seeds", "2", "--controllers", "aeb", "guarded", "--out", str(tmp_path / "s")]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert "× guarded, aeb →" in captured.err  # the table's order, whatever the order asked
+    assert "| scenario | guarded | aeb |" in captured.out and "| unguarded |" not in captured.out
+    assert "| guarded | 2 | 0 | 0 | 0 | – |" in captured.out  # progress is a share of the unguarded car's: none here
+    assert "totals: guarded 0 of 2 runs failed an outcome" in captured.out and "; aeb 0 of 2 runs" in captured.out
+    rows = [json.loads(line) for line in (tmp_path / "s" / "runs.jsonl").read_text().splitlines()]
+    assert sorted((r["controller"], r["seed"]) for r in rows) == [("aeb", 0), ("aeb", 1), ("guarded", 0), ("guarded", 1)]
+
+
+def test_the_cli_names_the_simulators_controllers_as_the_simulator_does(capsys) -> None:
+    from fearguard.cli import SIM_CONTROLLERS
+    from fearguard.sim.loop import CONTROLLERS
+
+    assert SIM_CONTROLLERS == CONTROLLERS
+    with pytest.raises(SystemExit) as exc:
+        main(["suite", "--controllers", "autopilot"])
+    assert exc.value.code == 2 and "invalid choice: 'autopilot'" in capsys.readouterr().err
+
+
 def _readme_commands() -> list[str]:
     """Every `.venv/bin/fearguard ...` line of README's bash blocks (continuations joined, comments cut)."""
     text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")

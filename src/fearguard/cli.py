@@ -26,6 +26,9 @@ from fearguard.drive.interrupt import StopSignal, stop_on_signals
 from fearguard.errors import FearguardError
 from fearguard.vehicle import PRESETS
 
+SIM_CONTROLLERS = ("guarded", "unguarded", "crisp", "aeb")  # sim.loop.CONTROLLERS, in its order (tests/test_cli_habits.py holds
+#   them equal; importing the simulator here would cost every command its import)
+
 if TYPE_CHECKING:
     from fearguard.cues import Cues
     from fearguard.observation import Lead
@@ -502,12 +505,13 @@ def cmd_suite(args: argparse.Namespace) -> int:
     executor = _executor(args)  # before anything is written: without Dask, a one-line error
     out = Path(args.out) if args.out else _latest_suite() if args.resume else _new_out("suite", f"{args.seeds}seeds")
     out.mkdir(parents=True, exist_ok=True)
-    print(f"suite: {len(files)} scenarios × {args.seeds} seed(s) × {', '.join(CONTROLLERS)} → {out}{_on(executor)}", file=sys.stderr)
+    controllers = [c for c in CONTROLLERS if c in (args.controllers or CONTROLLERS)]  # the table's order, each once
+    print(f"suite: {len(files)} scenarios × {args.seeds} seed(s) × {', '.join(controllers)} → {out}{_on(executor)}", file=sys.stderr)
     with _RunProgress("suite", executor, line=row_line, failed=lambda r: r["controller"] == "guarded" and not r["passed"]) as bar:
-        progress = run_suite(files, args.seeds, on_run=print if args.verbose else None, runs_log=out / "runs.jsonl",
+        progress = run_suite(files, args.seeds, controllers, on_run=print if args.verbose else None, runs_log=out / "runs.jsonl",
                              resume=args.resume, stop=args.stop, on_progress=bar.update, executor=executor, on_row=bar.row)
     rows = progress.rows
-    markdown = suite_markdown(rows)
+    markdown = suite_markdown(rows, controllers)
     (out / "suite.md").write_text(markdown, encoding="utf-8")
     write_json(out / "suite.json", {"interrupted": progress.interrupted, "stopped_by": progress.stopped_by,
                                     "planned_runs": progress.planned, "finished_runs": len(rows), "resumed_runs": progress.resumed,
@@ -516,7 +520,7 @@ def cmd_suite(args: argparse.Namespace) -> int:
     print("totals: " + "; ".join(
         f"{t['controller']} {t['failed']} of {t['runs']} runs failed an outcome ({t['collisions']} collisions, "
         f"{t['lane_departures']} departures)" + (f", {t['supervisor_failed']} failed a supervisor check" if t["controller"] == "guarded"
-                                                 else "") for t in suite_totals(rows)))
+                                                 else "") for t in suite_totals(rows, controllers)))
     print(f"wrote {out}/runs.jsonl, suite.md, suite.json ({len(rows)} of {progress.planned} runs"
           + (f", {progress.resumed} resumed)" if progress.resumed else ")"))
     if progress.interrupted:
@@ -950,7 +954,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=_count(0), default=None, help="random seed >= 0 (default: the scenario's)")
     who = run.add_mutually_exclusive_group()
     who.add_argument("--unguarded", action="store_true", help="no supervisor: cruise speed, the estimator alone")
-    who.add_argument("--baseline", choices=("unguarded", "crisp", "aeb"), default=None, help="a baseline speed rule instead of fearguard")
+    who.add_argument("--baseline", choices=SIM_CONTROLLERS[1:], default=None, help="a baseline speed rule instead of fearguard")
     run.add_argument("--out", type=_out_folder, default=None, help="output folder " + OUT_HELP % "run")
     run.add_argument("--video", action="store_true", help=VIDEO_HELP)
     run.add_argument("--mcap", action="store_true", help=MCAP_HELP)
@@ -964,6 +968,9 @@ def build_parser() -> argparse.ArgumentParser:
     suite.add_argument("--resume", action="store_true", help="skip the runs already in OUT/runs.jsonl (after an interruption; "
                        "without --out: the newest fearguard-out/suite-* folder)")
     suite.add_argument("--verbose", action="store_true", help="print each run as it finishes")
+    suite.add_argument("--controllers", nargs="+", choices=SIM_CONTROLLERS, default=None, metavar="NAME",
+                       help=f"only these controllers ({', '.join(SIM_CONTROLLERS)}; default: all): e.g. `--controllers guarded` "
+                       "checks a change of the rules or the perception in a quarter of the time")
     _batch_options(suite, "runs")
     suite.set_defaults(func=cmd_suite)
     sw = sub.add_parser("sweep", help="numbers of the rules and the vehicle × scenarios × seeds: safety against progress")
