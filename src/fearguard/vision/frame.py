@@ -45,7 +45,7 @@ from fearguard.vision.lanes import (
     work_size,
 )
 from fearguard.vision.lead import detect_lead, lead_from_box
-from fearguard.vision.obstacle import Obstacle, RoutePath, search_lane
+from fearguard.vision.obstacle import Obstacle, RoutePath, lane_hidden_beyond, search_lane
 from fearguard.vision.occlusion import default_lines, occlusion, road_appearance, road_reference, surface_maps
 from fearguard.vision.qr import detect_qr
 from fearguard.vision.steering import aim_point_u, lookahead_row, steering_from_aim
@@ -339,6 +339,9 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     measured = road_appearance(p.gray, hls, p.region, expected_l, expected_r, surface, interior=lanes.interior)
     road = trackers.road.reference(measured)
     occ = occlusion(p.gray, hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface, curves=lanes.expected)
+    if p.camera.mount_height_m is None and _seen_well(lanes):
+        # without a range, an object in the lane seen hides the lane beyond it (docs/perception.md, "occlusion")
+        occ = max(occ, lane_hidden_beyond(p.gray, surface, road, p.region, lanes.left, lanes.right, boxes))
     trackers.road.learn(measured, occ)
     obstacle, searched_m, stop_line_m = None, 0.0, None
     # a range needs the mounting height (without it the search is skipped). The bending lane model searches its own
@@ -358,6 +361,17 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     lead = lead_from_box(box, p.camera) if box is not None else None
     return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference, obstacle=obstacle, searched_m=searched_m,
                             stop_line_m=stop_line_m)
+
+
+SEEN_WELL_SUPPORT = 0.5  # [-] both boundaries' marking support at least this: the lane is seen, and its interior is where it is
+
+
+def _seen_well(lanes: Lanes) -> bool:
+    """Both boundaries detected this frame with marking support ≥ SEEN_WELL_SUPPORT (held over a dash gap, lane_tracker)."""
+    if lanes.seen_left is None or lanes.seen_right is None:
+        return False
+    support = lanes.held_support or (lanes.seen_left.support, lanes.seen_right.support)
+    return min(support) >= SEEN_WELL_SUPPORT
 
 
 def _in_bent_lane(bend: Bend, box: LeadBox, left: LaneLine, right: LaneLine) -> bool:

@@ -22,15 +22,19 @@ import numpy as np
 from fearguard.camera import CameraModel
 from fearguard.vision.lanes import LaneLine, RoadRegion
 from fearguard.vision.occlusion import (
+    ACROSS_LANE,
     BRIGHTER,
     COLOUR_SAT_MIN,
     DARKER,
     FOREIGN_DEV_MIN,
+    ROW_DEV,
     SAT_DEV,
     SMOOTH_SHARE,
     SMOOTHER_SHARE,
     RoadAppearance,
     SurfaceMaps,
+    row_references,
+    row_roughness,
 )
 
 INSET = 0.15  # [-] of the lane width on each side: the interior searched (the boundaries' paint stays out)
@@ -100,24 +104,36 @@ class Obstacle:
     range_m: float | None  # None without the camera's mounting height
 
 
-def foreign_mask(maps: SurfaceMaps, road: RoadAppearance, columns: slice = slice(None), *, smooth_objects: bool = True) -> np.ndarray:
+def foreign_mask(
+    maps: SurfaceMaps, road: RoadAppearance, columns: slice = slice(None), *, smooth_objects: bool = True,
+    rows_alike: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None, smoother: float = SMOOTHER_SHARE,
+) -> np.ndarray:
     """bool over the maps' band (those columns): patches that do not look like the road (any colour, any size).
 
     ``smooth_objects=False``: a patch smoother than the road but of its grey and colour is not foreign. On a tiled
     floor (Duckietown's curve tiles are ~3× rougher than its straight ones) that is the next tile, not an object; the
     objects there are coloured (ducks, cones), dark or pale. A smooth object of the road's own grey is then missed:
-    it is the range sensor's to see."""
+    it is the range sensor's to see.
+
+    ``rows_alike``: each band row's grey across the road, whether the row is one surface (``occlusion.row_references``)
+    and its roughness (``occlusion.row_roughness``): on such a row an uncoloured patch of the row's grey and no smoother
+    than the row (SMOOTH_SHARE) is road — smooth asphalt ahead of rough concrete, a shadow across the road — as
+    occlusion judges the boundaries' samples; a box of the road's grey is still smoother than its row."""
     grey, sat, rough = maps.grey[:, columns], maps.saturation[:, columns], maps.roughness[:, columns]
     ref = max(road.grey, 1.0)
     off = np.abs(grey - ref) >= FOREIGN_DEV_MIN
     lit = grey >= SHADE_SAT_GATE * ref  # HLS saturation of dark pixels is unstable: a shadow is no coloured object
     coloured = lit & ((sat >= COLOUR_SAT_MIN) | (np.abs(sat - road.saturation) >= SAT_DEV))
-    foreign = coloured | (off & (grey < DARKER * ref))
+    foreign = off & (grey < DARKER * ref)
     if road.textured:
         if smooth_objects:
             foreign |= rough < SMOOTH_SHARE * road.roughness
-        foreign |= off & (grey > BRIGHTER * ref) & (rough < SMOOTHER_SHARE * road.roughness)
-    return foreign
+        foreign |= off & (grey > BRIGHTER * ref) & (rough < smoother * road.roughness)
+    if rows_alike is not None:
+        row_grey, uniform, row_rough = (r[:, None] for r in rows_alike)
+        like_row = uniform & (np.abs(grey - row_grey) <= np.maximum(FOREIGN_DEV_MIN, ROW_DEV * row_grey))
+        foreign &= ~(like_row & ~(rough < SMOOTH_SHARE * row_rough))  # NaN roughness: never smoother
+    return foreign | coloured
 
 
 @dataclass(frozen=True)
@@ -281,6 +297,50 @@ def _painted_band(hit: np.ndarray, count: np.ndarray, width: np.ndarray, bottom:
         return None
     interior_m = float(width[bottom]) * scale * near / camera.fx_px  # flat-ground width of the interior at the band
     return top if far - near <= BAND_DEPTH * interior_m else None
+
+
+def lane_hidden_beyond(
+    gray: np.ndarray, maps: SurfaceMaps, road: RoadAppearance, region: RoadRegion, left: LaneLine, right: LaneLine,
+    boxes: tuple[tuple[int, int, int, int], ...] = (),
+) -> float:
+    """The share of the lane's length (road-region rows, from the object's lowest row to the region's top) hidden behind
+    the nearest object standing in the lane interior, for a camera without a mounting height (no range, so
+    ``search_lane`` does not run): found as ``search_lane`` finds one, by foreign patches over ``MIN_SHARE`` of a row
+    and ``MIN_ROWS`` rows. 0 when the interior looks like road. What is foreign here, and why it is stricter:
+    - foreign to each of ``roads`` — the road model of recent frames and this frame's own lane interior: where the whole
+      road turns brighter (wet asphalt under an open sky) the model lags a second behind, and reads all of it foreign;
+    - coloured, darker than any shadow, or brighter and smoother than SMOOTH_SHARE of the road's roughness (a white
+      body, a box); smooth alone is not enough (sunlit or wet asphalt is as smooth as a grey box);
+    - not paint (the maps' marking pixels), not of its row's grey and texture on a row that is one surface across the
+      road (``foreign_mask``'s ``rows_alike``), not inside a known vehicle's box (the lead: ranged and followed)."""
+    rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
+    a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
+    inset = INSET * np.abs(b - a)
+    lo = np.clip(np.ceil(np.minimum(a, b) + inset), 0, region.width_px).astype(np.int64)
+    hi = np.clip(np.floor(np.maximum(a, b) - inset), 0, region.width_px).astype(np.int64)
+    c0, c1 = int(lo.min()), int(max(hi.max(), lo.min()))
+    if c1 <= c0:
+        return 0.0
+    cols = np.arange(c0, c1)[None, :]
+    inside = (cols >= lo[:, None]) & (cols < hi[:, None])
+    pi = maps.paint_integral
+    paint = (pi[1:, c0 + 1 : c1 + 1] - pi[:-1, c0 + 1 : c1 + 1] - pi[1:, c0:c1] + pi[:-1, c0:c1]) > 0  # each pixel's own
+    for x, y, w, h in boxes:
+        inside[max(0, y - region.top_v_px) : max(0, y + h - region.top_v_px), max(0, x - c0) : max(0, x + w - c0)] = False
+    width = np.maximum(hi - lo, 0)
+    need = np.maximum(MIN_PX, MIN_SHARE * width)
+    judged = (inside & ~paint)[:, ::2]
+    bottom = None
+    alike = None
+    for _ in range(2):  # the rows' own references only when some stretch of rows is a candidate (a clean road: none)
+        foreign = foreign_mask(maps, road, slice(c0, c1, 2), smooth_objects=False, rows_alike=alike, smoother=SMOOTH_SHARE)
+        counted = 2 * (foreign & judged).sum(axis=1)  # every second column: the patches are 13 columns wide
+        bottom = _lowest_stretch_end((width > 0) & (counted >= need), MIN_ROWS)
+        if bottom is None or alike is not None:
+            break
+        lane = (left, right)
+        alike = (*row_references(gray, region, rows, lane, ACROSS_LANE), row_roughness(maps, region, rows, lane, ACROSS_LANE))
+    return 0.0 if bottom is None else (bottom + 1) / len(rows)
 
 
 def _lowest_stretch_end(hit: np.ndarray, min_rows: int) -> int | None:

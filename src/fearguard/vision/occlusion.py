@@ -53,7 +53,8 @@ MODEL_GREY_RATIO = 1.35  # [-] a frame's road this much brighter or darker than 
 MODEL_ROUGH_RATIO = 2.0  # [-] ... as is one this much rougher or smoother
 LEARN_OCCLUSION_MAX = 0.15  # [-] frames with more occlusion than this do not teach the model
 _INTERIOR_FRACTIONS = np.linspace(0.2, 0.8, 5)  # [-] of the lane width: where road_appearance samples each row
-_ACROSS_FRACTIONS = np.linspace(-0.9, 1.9, ROW_SAMPLES)  # [-] of the lane width: row_references' points across the road
+ACROSS_ROAD = np.linspace(-0.9, 1.9, ROW_SAMPLES)  # [-] of the lane width: row_references' points across the road
+ACROSS_LANE = np.linspace(0.05, 0.95, ROW_SAMPLES)  # [-] of the lane width: ... across the ego lane alone
 
 
 @dataclass(frozen=True)
@@ -184,25 +185,42 @@ def road_reference(gray: np.ndarray, region: RoadRegion, left: LaneLine, right: 
 
 
 def row_references(
-    gray: np.ndarray, region: RoadRegion, rows: np.ndarray, interior: tuple[LaneLine, LaneLine]
+    gray: np.ndarray, region: RoadRegion, rows: np.ndarray, interior: tuple[LaneLine, LaneLine], across: np.ndarray = ACROSS_ROAD,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Median grey across the road on each row — the ego lane and a lane width either side (in the image only) —
-    and whether the row is uniform (ROW_UNIFORM of its points close to that median: one surface across the road,
-    not a vehicle or a box covering part of it)."""
+    """Median grey across the road on each row — at ``across`` (shares of the lane width from its left boundary; by
+    default the ego lane and a lane width either side), in the image only — and whether the row is uniform (ROW_UNIFORM
+    of its points close to that median: one surface across the road, not a vehicle or a box covering part of it)."""
     a, b = interior[0].u_at(rows.astype(float)), interior[1].u_at(rows.astype(float))
-    frac = _ACROSS_FRACTIONS
+    frac = across
     cols = np.rint(a[:, None] + frac[None, :] * (b - a)[:, None])
     inside = (cols >= 0) & (cols < region.width_px)
     values = gray[rows[:, None], clamp(cols, 0, region.width_px - 1).astype(np.int64)].astype(float)
-    # median of the in-image samples per row (np.nanmedian goes through masked arrays: 10× slower here)
+    med = _row_medians(values, inside)
+    close = inside & (np.abs(values - med[:, None]) <= np.maximum(FOREIGN_DEV_MIN, ROW_DEV * med)[:, None])
+    return med, close.sum(axis=1) >= ROW_UNIFORM * np.maximum(inside.sum(axis=1), 1)
+
+
+def row_roughness(
+    maps: SurfaceMaps, region: RoadRegion, rows: np.ndarray, interior: tuple[LaneLine, LaneLine], across: np.ndarray = ACROSS_ROAD,
+) -> np.ndarray:
+    """Median patch roughness on each row at ``row_references``' points (in the image only; NaN on a row with none): a
+    row's own texture, which changes along the road (asphalt ahead of concrete) as its grey does."""
+    a, b = interior[0].u_at(rows.astype(float)), interior[1].u_at(rows.astype(float))
+    cols = np.rint(a[:, None] + across[None, :] * (b - a)[:, None])
+    inside = (cols >= 0) & (cols < region.width_px)
+    values = maps.roughness[(rows - maps.top_v_px)[:, None], clamp(cols, 0, region.width_px - 1).astype(np.int64)]
+    return _row_medians(values.astype(float), inside)
+
+
+def _row_medians(values: np.ndarray, inside: np.ndarray) -> np.ndarray:
+    """Median of each row's values where ``inside`` (NaN for a row with none): np.nanmedian goes through masked arrays,
+    10× slower here."""
     ordered = np.sort(np.where(inside, values, np.inf), axis=1)
     n = inside.sum(axis=1)
     lo = np.maximum(n - 1, 0) // 2
-    r = np.arange(len(rows))
+    r = np.arange(len(values))
     med = 0.5 * (ordered[r, lo] + ordered[r, np.where(n % 2 == 0, n // 2, lo)])
-    med = np.where(n > 0, med, np.nan)
-    close = inside & (np.abs(values - med[:, None]) <= np.maximum(FOREIGN_DEV_MIN, ROW_DEV * med)[:, None])
-    return med, close.sum(axis=1) >= ROW_UNIFORM * np.maximum(n, 1)
+    return np.where(n > 0, med, np.nan)
 
 
 def sample_rows(region: RoadRegion) -> np.ndarray:
