@@ -115,10 +115,12 @@ def foreign_mask(
     objects there are coloured (ducks, cones), dark or pale. A smooth object of the road's own grey is then missed:
     it is the range sensor's to see.
 
-    ``rows_alike``: each band row's grey across the road, whether the row is one surface (``occlusion.row_references``)
-    and its roughness (``occlusion.row_roughness``): on such a row an uncoloured patch of the row's grey and no smoother
-    than the row (SMOOTH_SHARE) is road — smooth asphalt ahead of rough concrete, a shadow across the road — as
-    occlusion judges the boundaries' samples; a box of the road's grey is still smoother than its row."""
+    ``rows_alike``: each band row's grey across the road (or the lane), whether the row is one surface
+    (``occlusion.row_references``) and its roughness (``occlusion.row_roughness``): on such a row an uncoloured patch
+    of the row's grey and no smoother than SMOOTH_SHARE of the row's roughness is road — smooth asphalt ahead of rough
+    concrete, a shadow across the road — as occlusion judges the boundaries' samples; a box of the road's grey is still
+    smoother than its row. ``smoother``: a brighter patch is foreign when smoother than this share of the road's
+    roughness."""
     grey, sat, rough = maps.grey[:, columns], maps.saturation[:, columns], maps.roughness[:, columns]
     ref = max(road.grey, 1.0)
     off = np.abs(grey - ref) >= FOREIGN_DEV_MIN
@@ -306,13 +308,14 @@ def lane_hidden_beyond(
     """The share of the lane's length (road-region rows, from the object's lowest row to the region's top) hidden behind
     the nearest object standing in the lane interior, for a camera without a mounting height (no range, so
     ``search_lane`` does not run): found as ``search_lane`` finds one, by foreign patches over ``MIN_SHARE`` of a row
-    and ``MIN_ROWS`` rows. 0 when the interior looks like road. What is foreign here, and why it is stricter:
-    - foreign to each of ``roads`` — the road model of recent frames and this frame's own lane interior: where the whole
-      road turns brighter (wet asphalt under an open sky) the model lags a second behind, and reads all of it foreign;
+    and ``MIN_ROWS`` rows. 0 when the interior looks like road (``road``: the road model's appearance). What is
+    foreign here, and why it is stricter than for ``search_lane`` (docs/perception.md, "occlusion"):
     - coloured, darker than any shadow, or brighter and smoother than SMOOTH_SHARE of the road's roughness (a white
       body, a box); smooth alone is not enough (sunlit or wet asphalt is as smooth as a grey box);
-    - not paint (the maps' marking pixels), not of its row's grey and texture on a row that is one surface across the
-      road (``foreign_mask``'s ``rows_alike``), not inside a known vehicle's box (the lead: ranged and followed)."""
+    - not of its row's grey and texture on a row that is one surface across the lane (``foreign_mask``'s
+      ``rows_alike`` over ``occlusion.ACROSS_LANE``): the whole road turning brighter under an open sky, while the road
+      model lags a second behind, stays road;
+    - not paint (the maps' marking pixels), not inside a known vehicle's box (the lead: ranged and followed)."""
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
     a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
     inset = INSET * np.abs(b - a)
