@@ -23,9 +23,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-import fearguard as fg
-
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+from tests.perturb import not_frozen, with_box  # noqa: E402  (one home for the perturbations)
+
+import fearguard as fg  # noqa: E402
+
 STILLS = ROOT.parent / "shared" / "data" / "road" / "images"
 WARM_FRAMES = 5
 BOXED_FRAMES = 3
@@ -35,22 +38,18 @@ PLACES = {"centre": (0.5, 0.74), "left": (0.38, 0.72), "right": (0.62, 0.72)}  #
 SIZES = {"small": 0.15, "medium": 0.3, "large": 0.5}  # the box's width, share of the picture's width
 
 
-def with_box(img: np.ndarray, place: tuple[float, float], size: float, colour: tuple[int, int, int]) -> np.ndarray:
-    out = img.copy()
-    h, w = out.shape[:2]
-    bw, bh = size * w, 0.45 * size * w
-    u, v = place[0] * w, place[1] * h
-    cv2.rectangle(out, (int(u - bw / 2), int(v - bh / 2)), (int(u + bw / 2), int(v + bh / 2)), colour, -1)
-    return out
+def boxed(img: np.ndarray, place: tuple[float, float], size: float, colour: tuple[int, int, int]) -> np.ndarray:
+    """The still with a box ``size`` of its width wide, 0.45× as tall, centred at ``place`` (shares of the picture)."""
+    h, w = img.shape[:2]
+    half_u, half_v = size / 2, 0.45 * size * w / h / 2
+    return with_box(img, (place[0] - half_u, place[1] - half_v, place[0] + half_u, place[1] + half_v), colour)
 
 
 def watched(guard: fg.FearGuard, frames: list[np.ndarray], start: int = 0) -> fg.Command:
-    """The command after the frames (one corner pixel changed per frame: a real camera never repeats its bytes)."""
+    """The command after the frames (``not_frozen``: a real camera never repeats its bytes)."""
     cmd = None
     for i, frame in enumerate(frames, start):
-        moving = frame.copy()
-        moving[0, 0] = i % 256
-        cmd = guard.step(fg.Observation(t_s=0.05 * i, speed_mps=1.0, frame=moving))
+        cmd = guard.step(fg.Observation(t_s=0.05 * i, speed_mps=1.0, frame=not_frozen(frame, i)))
     assert cmd is not None
     return cmd
 
@@ -72,7 +71,7 @@ def main(argv: list[str] | None = None) -> int:
         for place, centre in PLACES.items():
             for size, share in SIZES.items():
                 for colour, bgr in COLOURS_BGR.items():
-                    cmd = watched(copy.deepcopy(guard), [with_box(img, centre, share, bgr)] * BOXED_FRAMES, WARM_FRAMES)
+                    cmd = watched(copy.deepcopy(guard), [boxed(img, centre, share, bgr)] * BOXED_FRAMES, WARM_FRAMES)
                     ok = cmd.cues.occlusion >= 0.3 and cmd.fear >= clean.fear + 0.2
                     cases.append({"still": path.name, "place": place, "size": size, "colour": colour, "passed": bool(ok),
                                   "occlusion": cmd.cues.occlusion, "fear": cmd.fear, "clean_fear": clean.fear})

@@ -173,13 +173,7 @@ def search_lane(
             a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
         else:
             a, b = np.nan_to_num(bounds[0], nan=0.0), np.nan_to_num(bounds[1], nan=0.0)
-        inset = INSET * (b - a)
-        lo = np.clip(np.ceil(a + inset), 0, region.width_px).astype(np.int64)
-        hi = np.clip(np.floor(b - inset), 0, region.width_px).astype(np.int64)
-        c0, c1 = int(lo.min()), int(max(hi.max(), lo.min()))  # only the columns some row's interior covers are judged
-        cols = np.arange(c0, c1)[None, :]
-        inside = (cols >= lo[:, None]) & (cols < hi[:, None])
-        width = np.maximum(hi - lo, 0)
+        c0, c1, inside, width = _inset_interior(a, b, region.width_px)
         foreign = foreign_mask(maps, road, slice(c0, c1), smooth_objects=smooth_objects) & inside
     else:
         spans = np.flatnonzero(interior.any(axis=0))
@@ -318,19 +312,13 @@ def lane_hidden_beyond(
     - not paint (the maps' marking pixels), not inside a known vehicle's box (the lead: ranged and followed)."""
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
     a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
-    inset = INSET * np.abs(b - a)
-    lo = np.clip(np.ceil(np.minimum(a, b) + inset), 0, region.width_px).astype(np.int64)
-    hi = np.clip(np.floor(np.maximum(a, b) - inset), 0, region.width_px).astype(np.int64)
-    c0, c1 = int(lo.min()), int(max(hi.max(), lo.min()))
+    c0, c1, inside, width = _inset_interior(np.minimum(a, b), np.maximum(a, b), region.width_px)  # lines that cross: as they lie
     if c1 <= c0:
         return 0.0
-    cols = np.arange(c0, c1)[None, :]
-    inside = (cols >= lo[:, None]) & (cols < hi[:, None])
     pi = maps.paint_integral
     paint = (pi[1:, c0 + 1 : c1 + 1] - pi[:-1, c0 + 1 : c1 + 1] - pi[1:, c0:c1] + pi[:-1, c0:c1]) > 0  # each pixel's own
     for x, y, w, h in boxes:
         inside[max(0, y - region.top_v_px) : max(0, y + h - region.top_v_px), max(0, x - c0) : max(0, x + w - c0)] = False
-    width = np.maximum(hi - lo, 0)
     need = np.maximum(MIN_PX, MIN_SHARE * width)
     judged = (inside & ~paint)[:, ::2]
     bottom = None
@@ -344,6 +332,17 @@ def lane_hidden_beyond(
         lane = (left, right)
         alike = (*row_references(gray, region, rows, lane, ACROSS_LANE), row_roughness(maps, region, rows, lane, ACROSS_LANE))
     return 0.0 if bottom is None else (bottom + 1) / len(rows)
+
+
+def _inset_interior(a: np.ndarray, b: np.ndarray, width_px: int) -> tuple[int, int, np.ndarray, np.ndarray]:
+    """The lane interior between each row's left and right column (a, b), INSET of the lane width inside each: the
+    columns [c0, c1) some row's interior covers, bool (rows, c1 − c0) inside it, and each row's interior width."""
+    inset = INSET * (b - a)
+    lo = np.clip(np.ceil(a + inset), 0, width_px).astype(np.int64)
+    hi = np.clip(np.floor(b - inset), 0, width_px).astype(np.int64)
+    c0, c1 = int(lo.min()), int(max(hi.max(), lo.min()))  # only the columns some row's interior covers are judged
+    cols = np.arange(c0, c1)[None, :]
+    return c0, c1, (cols >= lo[:, None]) & (cols < hi[:, None]), np.maximum(hi - lo, 0)
 
 
 def _lowest_stretch_end(hit: np.ndarray, min_rows: int) -> int | None:

@@ -190,11 +190,8 @@ def row_references(
     """Median grey across the road on each row — at ``across`` (shares of the lane width from its left boundary; by
     default the ego lane and a lane width either side), in the image only — and whether the row is uniform (ROW_UNIFORM
     of its points close to that median: one surface across the road, not a vehicle or a box covering part of it)."""
-    a, b = interior[0].u_at(rows.astype(float)), interior[1].u_at(rows.astype(float))
-    frac = across
-    cols = np.rint(a[:, None] + frac[None, :] * (b - a)[:, None])
-    inside = (cols >= 0) & (cols < region.width_px)
-    values = gray[rows[:, None], clamp(cols, 0, region.width_px - 1).astype(np.int64)].astype(float)
+    cols, inside = _across_points(region, rows, interior, across)
+    values = gray[rows[:, None], cols].astype(float)
     med = _row_medians(values, inside)
     close = inside & (np.abs(values - med[:, None]) <= np.maximum(FOREIGN_DEV_MIN, ROW_DEV * med)[:, None])
     return med, close.sum(axis=1) >= ROW_UNIFORM * np.maximum(inside.sum(axis=1), 1)
@@ -205,11 +202,19 @@ def row_roughness(
 ) -> np.ndarray:
     """Median patch roughness on each row at ``row_references``' points (in the image only; NaN on a row with none): a
     row's own texture, which changes along the road (asphalt ahead of concrete) as its grey does."""
+    cols, inside = _across_points(region, rows, interior, across)
+    return _row_medians(maps.roughness[(rows - maps.top_v_px)[:, None], cols].astype(float), inside)
+
+
+def _across_points(
+    region: RoadRegion, rows: np.ndarray, interior: tuple[LaneLine, LaneLine], across: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Each row's columns at ``across`` (shares of the lane width from its left boundary), clamped into the image, and
+    which of them lie in it."""
     a, b = interior[0].u_at(rows.astype(float)), interior[1].u_at(rows.astype(float))
     cols = np.rint(a[:, None] + across[None, :] * (b - a)[:, None])
     inside = (cols >= 0) & (cols < region.width_px)
-    values = maps.roughness[(rows - maps.top_v_px)[:, None], clamp(cols, 0, region.width_px - 1).astype(np.int64)]
-    return _row_medians(values.astype(float), inside)
+    return clamp(cols, 0, region.width_px - 1).astype(np.int64), inside
 
 
 def _row_medians(values: np.ndarray, inside: np.ndarray) -> np.ndarray:
