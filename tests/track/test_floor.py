@@ -7,13 +7,14 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fearguard.errors import FileError
-from fearguard.track.floor import FLOOR_PX, as_occlusion, floor_lab, learn_floor
+from fearguard.track.floor import FLOOR_PX, SMOOTH_RATIO, as_occlusion, floor_view, learn_floor
 from fearguard.track.learn import LearnOptions, learn_track
 from fearguard.track.profile import load_track, profile_from_arrays, save_track
 from fearguard.track.reading import floor_hidden, read_as_learnt
@@ -21,6 +22,7 @@ from fearguard.track.reading import floor_hidden, read_as_learnt
 ROBOCAR = "modelcar/robocar-ucsd-window/images"
 
 colour = st.tuples(st.integers(0, 255), st.integers(0, 255), st.integers(0, 255))
+grainable = st.tuples(st.integers(30, 225), st.integers(30, 225), st.integers(30, 225))  # grain is not clipped at 0 or 255
 
 
 def _course(rng: np.random.Generator, floor: tuple[int, int, int], tape: tuple[int, int, int], size: tuple[int, int],
@@ -55,7 +57,7 @@ def test_a_wall_ahead_hides_the_floor_and_the_course_does_not(floor, tape, wall,
     rng = np.random.default_rng(seed)
     if not (_far_enough(floor, wall) and _far_enough(floor, tape) and _far_enough(tape, wall)):
         return  # a wall the colour of the floor or of its tape (tape lies on the floor ahead of the nose) is not seen
-    model = learn_floor([floor_lab(_course(rng, floor, tape, size, wall, horizon)) for _ in range(30)])
+    model = learn_floor([floor_view(_course(rng, floor, tape, size, wall, horizon)) for _ in range(30)])
     assert model is not None
     again = [model.hidden(_course(rng, floor, tape, size, wall, horizon)) for _ in range(5)]
     assert max(again) <= 0.2, again  # more of the same course: its floor is where it was
@@ -80,8 +82,52 @@ def test_more_floor_hidden_is_never_less_occlusion_and_the_typical_frame_is_calm
     assert math.isnan(as_occlusion(math.nan, usual, calm))
 
 
+def _grained(rng: np.random.Generator, floor: tuple[int, int, int], size: tuple[int, int], grain: float, horizon: float,
+             along: bool) -> np.ndarray:
+    """A floor with grain of this strength (grey levels): speckle (carpet, concrete) or streaks along one direction (wood),
+    under a plain wall above the horizon."""
+    w, h = size
+    if along:  # wood: streaks across the picture, a few pixels apart, of random strength
+        streaks = rng.normal(0.0, grain, (h, 1)) * np.ones((1, w))
+        texture = cv2.GaussianBlur(streaks + rng.normal(0.0, grain / 3, (h, w)), (1, 3), 0)
+    else:
+        texture = rng.normal(0.0, grain, (h, w))
+    img = np.clip(np.array(floor, np.float64)[None, None, :] + texture[:, :, None], 0, 255)
+    img[: int(horizon * h)] = (90, 90, 90)
+    return img.astype(np.uint8)
+
+
+@settings(max_examples=25, deadline=None)
+@given(grainable, st.sampled_from([(160, 120), (320, 240), (640, 360)]), st.floats(6.0, 25.0), st.floats(0.25, 0.45),
+       st.booleans(), st.integers(0, 2**16))
+def test_a_flat_box_of_the_floors_own_colour_hides_the_floor_and_more_of_the_floor_does_not(floor, size, grain, horizon,
+                                                                                             along, seed):
+    """Issue 34's box over half the lane, the colour of the floor: an orange box on an orange wooden floor, a black one
+    on dark concrete. Its colour matches; its missing grain does not."""
+    rng = np.random.default_rng(seed)
+    model = learn_floor([floor_view(_grained(rng, floor, size, grain, horizon, along)) for _ in range(20)])
+    assert model is not None and model.texture_low is not None
+    again = [model.hidden(_grained(rng, floor, size, grain, horizon, along)) for _ in range(5)]
+    assert max(again) <= 0.2, again
+    boxed = _grained(rng, floor, size, grain, horizon, along)
+    w, h = size
+    boxed[h // 2:, w // 4: 3 * w // 4] = floor
+    box_share = 0.25 / (1.0 - horizon)  # of the floor in view: the box is a quarter of the picture
+    assert model.hidden(boxed) >= max(0.7 * box_share, max(again) + 0.15)
+
+
+def test_a_floor_that_was_smooth_asks_nothing_of_the_texture():
+    rng = np.random.default_rng(3)
+    plain = [_grained(rng, (60, 140, 200), (160, 120), 0.0, 0.4, False) for _ in range(10)]
+    model = learn_floor([floor_view(f) for f in plain])
+    assert model is not None and model.texture_low is not None and float(model.texture_low.max()) == 0.0
+    assert model.hidden(plain[0]) <= 0.05
+    assert learn_floor([floor_view(f) for f in plain], texture_percentile=None).texture_low is None
+    assert 0.0 < SMOOTH_RATIO < 1.0
+
+
 def test_too_little_to_learn_a_floor_from_is_no_model():
-    assert learn_floor([]) is None and learn_floor([floor_lab(np.zeros((120, 160, 3), np.uint8))]) is None
+    assert learn_floor([]) is None and learn_floor([floor_view(np.zeros((120, 160, 3), np.uint8))]) is None
 
 
 @pytest.fixture(scope="module")
@@ -134,15 +180,22 @@ def test_the_floor_survives_its_file_and_old_profiles_load_without_one(robocar, 
     assert back.floor is not None and robocar.floor is not None
     assert np.array_equal(back.floor.usual, robocar.floor.usual) and back.floor.radius_lab == robocar.floor.radius_lab
     assert back.floor.hidden_usual == robocar.floor.hidden_usual
+    assert back.floor.texture_low is not None and robocar.floor.texture_low is not None
+    assert np.array_equal(back.floor.texture_low, robocar.floor.texture_low)
     with np.load(tmp_path / "t.npz") as z:
         data = {k: z[k] for k in z.files if not k.startswith("floor_")}
+        before_texture = {k: z[k] for k in z.files if k != "floor_texture_low"}
     assert profile_from_arrays(data, "old.npz").floor is None
+    older = profile_from_arrays(before_texture, "older.npz").floor  # learnt before the texture test: colour alone
+    assert older is not None and older.texture_low is None
 
 
 @pytest.mark.parametrize(("key", "value"), [
     ("floor_usual", np.zeros((3, 3))), ("floor_usual", np.full((FLOOR_PX[1], FLOOR_PX[0]), 2.0)),
     ("floor_radius_lab", np.array(0.0)), ("floor_hidden_usual", np.array(1.5)), ("floor_colours_lab", np.zeros((0, 3))),
     ("floor_colours_lab", np.full((2, 3), np.nan)), ("floor_radius_lab", None),
+    ("floor_texture_low", np.zeros((3, 3))), ("floor_texture_low", np.full((FLOOR_PX[1], FLOOR_PX[0]), -1.0)),
+    ("floor_texture_low", np.full((FLOOR_PX[1], FLOOR_PX[0]), np.inf)),
 ])
 def test_a_wrong_floor_names_its_key(robocar, tmp_path, key, value):
     with np.load(save_track(robocar, tmp_path / "ok.npz")) as z:
@@ -156,11 +209,12 @@ def test_a_wrong_floor_names_its_key(robocar, tmp_path, key, value):
 
 
 @settings(max_examples=120, deadline=None)
-@given(st.dictionaries(st.sampled_from(["floor_colours_lab", "floor_radius_lab", "floor_usual", "floor_hidden_usual"]),
+@given(st.dictionaries(st.sampled_from(["floor_colours_lab", "floor_radius_lab", "floor_usual", "floor_hidden_usual",
+                                        "floor_texture_low"]),
                        st.one_of(st.none(), st.integers(-3, 300).map(np.array), st.text(max_size=5).map(np.array),
                                  st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=6).map(np.array),
                                  st.floats(-2.0, 300.0).map(lambda v: np.full((FLOOR_PX[1], FLOOR_PX[0]), v)),
-                                 st.floats(-2.0, 300.0).map(lambda v: np.full((3, 3), v))), max_size=4))
+                                 st.floats(-2.0, 300.0).map(lambda v: np.full((3, 3), v))), max_size=5))
 def test_hostile_floor_arrays_in_a_good_profile_are_a_file_error_or_a_floor_never_a_crash(robocar, tmp_path_factory, changes):
     with np.load(save_track(robocar, tmp_path_factory.mktemp("floor") / "ok.npz")) as z:
         data = {k: z[k] for k in z.files}

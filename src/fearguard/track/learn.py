@@ -27,7 +27,7 @@ from fearguard.errors import FearguardError
 from fearguard.replay.recordings import open_recording
 from fearguard.replay.sources import parse_position
 from fearguard.track.features import frame_features
-from fearguard.track.floor import floor_lab, learn_floor
+from fearguard.track.floor import FloorView, floor_view, learn_floor
 from fearguard.track.profile import (
     BAND_PERCENTILES,
     CALIBRATION_GAP_S,
@@ -82,7 +82,7 @@ class _Frames:
     lane: list[float]
     occlusion: list[float]
     marking_pixels: list[np.ndarray]
-    floor: list[np.ndarray]
+    floor: list[FloorView]
     typical: list[np.ndarray]
 
 
@@ -118,7 +118,7 @@ def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnO
                 got.lane.append(a.lane_confidence)
                 got.occlusion.append(a.occlusion)
                 got.marking_pixels.append(_contrast_pixels(frame.image_bgr))
-                got.floor.append(floor_lab(frame.image_bgr))
+                got.floor.append(floor_view(frame.image_bgr))
                 if len(got.typical) < 64:
                     got.typical.append(frame.image_bgr)
         skipped += len(source.skipped)

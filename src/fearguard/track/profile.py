@@ -19,6 +19,7 @@ distances::
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -181,25 +182,33 @@ def profile_from_arrays(data: dict[str, np.ndarray], where: str) -> TrackProfile
     if not (math.isnan(occ_usual) or 0.0 <= occ_usual <= 1.0):
         raise FileError(where, "occlusion_usual", f"expected a share 0..1 (or NaN), got {occ_usual!r}")
     colours = need("marking_colours_bgr", 2, 3) if "marking_colours_bgr" in data else np.zeros((0, 3))
-    floor = None
-    if "floor_colours_lab" in data:  # profiles learnt before the floor model have none
-        floor_colours, radius, usual = need("floor_colours_lab", 2, 3), need("floor_radius_lab", 0), need("floor_usual", 2)
-        hidden = need("floor_hidden_usual", 0)
-        if floor_colours.shape[0] < 1 or not 0.0 <= floor_colours.min() <= floor_colours.max() <= 255.0:
-            raise FileError(where, "floor_colours_lab", f"expected 1 or more Lab colours 0..255, got {floor_colours.shape[0]}")
-        if not float(radius) > 0.0:
-            raise FileError(where, "floor_radius_lab", f"expected a distance > 0, got {float(radius)!r}")
-        if usual.shape != (FLOOR_PX[1], FLOOR_PX[0]) or not 0.0 <= usual.min() <= usual.max() <= 1.0:
-            raise FileError(where, "floor_usual", f"expected shares 0..1 of shape {(FLOOR_PX[1], FLOOR_PX[0])}, got {usual.shape}")
-        if not 0.0 <= float(hidden) <= 1.0:
-            raise FileError(where, "floor_hidden_usual", f"expected a share 0..1, got {float(hidden)!r}")
-        floor = FloorModel(floor_colours, float(radius), usual, float(hidden))
+    floor = _floor_from_arrays(data, need, where) if "floor_colours_lab" in data else None  # none before the floor model
     return TrackProfile(
         source=str(data.get("source", "")), frames_learnt=int(need("frames_learnt", 0)), mean=mean, weights=weights,
         basis=basis, bank=bank, calibration_distances=np.sort(calib), brightness_band=(float(band[0]), float(band[1])),
         lane_confidence_median=float(lane) if np.ndim(lane) == 0 and lane.dtype.kind in "fiu" else math.nan,
         marking_colours_bgr=colours, occlusion_usual=occ_usual, floor=floor,
     )
+
+
+def _floor_from_arrays(data: dict[str, np.ndarray], need: Callable[..., np.ndarray], where: str) -> FloorModel:
+    """The floor model's keys of a saved profile, checked (``need`` checks one key)."""
+    floor_colours, radius, usual = need("floor_colours_lab", 2, 3), need("floor_radius_lab", 0), need("floor_usual", 2)
+    hidden = need("floor_hidden_usual", 0)
+    if floor_colours.shape[0] < 1 or not 0.0 <= floor_colours.min() <= floor_colours.max() <= 255.0:
+        raise FileError(where, "floor_colours_lab", f"expected 1 or more Lab colours 0..255, got {floor_colours.shape[0]}")
+    if not float(radius) > 0.0:
+        raise FileError(where, "floor_radius_lab", f"expected a distance > 0, got {float(radius)!r}")
+    if usual.shape != (FLOOR_PX[1], FLOOR_PX[0]) or not 0.0 <= usual.min() <= usual.max() <= 1.0:
+        raise FileError(where, "floor_usual", f"expected shares 0..1 of shape {(FLOOR_PX[1], FLOOR_PX[0])}, got {usual.shape}")
+    if not 0.0 <= float(hidden) <= 1.0:
+        raise FileError(where, "floor_hidden_usual", f"expected a share 0..1, got {float(hidden)!r}")
+    texture = None
+    if "floor_texture_low" in data:  # profiles learnt before the texture test have none
+        texture = need("floor_texture_low", 2)
+        if texture.shape != usual.shape or texture.min() < 0.0:
+            raise FileError(where, "floor_texture_low", f"expected textures ≥ 0 of shape {usual.shape}, got {texture.shape}")
+    return FloorModel(floor_colours, float(radius), usual, float(hidden), texture)
 
 
 def save_track(profile: TrackProfile, path: str | Path) -> Path:
@@ -222,7 +231,8 @@ def _floor_arrays(floor: FloorModel | None) -> dict[str, np.ndarray]:
     if floor is None:
         return {}
     return {"floor_colours_lab": floor.colours_lab, "floor_radius_lab": np.array(floor.radius_lab),
-            "floor_usual": floor.usual, "floor_hidden_usual": np.array(floor.hidden_usual)}
+            "floor_usual": floor.usual, "floor_hidden_usual": np.array(floor.hidden_usual),
+            **({"floor_texture_low": floor.texture_low} if floor.texture_low is not None else {})}
 
 
 def block_weights(features: np.ndarray) -> np.ndarray:
