@@ -12,9 +12,9 @@ hides floor that normal driving showed in that part of the picture. Learnt from 
 
 A cell **shows floor** when its colour is within the radius of a floor colour and it is not much smoother than the floor
 there ever was (texture at least ``SMOOTH_RATIO`` × ``texture_low``): a box of the floor's own colour — an orange box on
-an orange wooden floor, a black one on dark concrete — has the colour and none of the grain (issue 34's boxes: 0 of 23
-such frames on the wood floor of ``deeppicar-tape`` read as hidden by colour alone). A floor that was smooth on the
-recordings (a plain mat, ``texture_low`` ≈ 0) asks nothing of the texture.
+an orange wooden floor, a black one on dark concrete — has the colour and none of the grain (issue 34's boxes: by colour
+alone, none of 23 such frames on the wood floor of ``deeppicar-tape`` read as heavily hidden; with the grain, all). A
+floor that was smooth on the recordings (a plain mat, ``texture_low`` ≈ 0) asks nothing of the texture.
 
 A frame's **hidden floor** is the share of the cells that usually show floor (``usual`` ≥ ``USUAL_SHARE``, weighted by
 it) that do not now. It is read against the recordings' own median (``hidden_usual``: contaminated recordings — a few
@@ -52,7 +52,8 @@ SMOOTH_RATIO = 0.25  # [-] a cell smoother than this share of that is no floor, 
 MIN_TEXTURE_FRAMES = 5  # [frames] a cell that showed floor colour in fewer learnt frames asks nothing of its texture
 # FLOOR_COLOURS, MATCH_PERCENTILE, USUAL_SHARE and MIN_RADIUS_LAB chosen on the 11 model-car sources of the development
 # corpus, each left out in turn (benchmarks/eval_floor.py; docs/learning.md, "The floor"); TEXTURE_PERCENTILE and
-# SMOOTH_RATIO there too, as the most lenient pair that still reads a flat box as no floor (docs/learning.md)
+# SMOOTH_RATIO on the same sources, as the most lenient pair that still reads a flat box as no floor (docs/learning.md,
+# "The grain": eval_floor.py grids the test on and off)
 
 
 @dataclass(frozen=True, eq=False)  # eq=False: holds arrays
