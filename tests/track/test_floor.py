@@ -158,6 +158,25 @@ def test_on_a_real_track_a_box_over_the_lane_hides_the_floor_later_laps_do_not(r
         assert np.median(boxed) > np.median(plain) + 0.1, (box, boxed)
 
 
+def test_on_a_real_wooden_floor_a_box_of_its_own_colour_is_seen_by_its_missing_grain(shared_data):
+    """deeppicar-tape: blue tape on an orange wooden floor. An orange box over half the lane matches the floor's colour
+    (by colour alone it hides less than the plain frames do); the wood's grain is what it lacks."""
+    video = shared_data / "modelcar/deeppicar-tape/video01.avi"
+    floor = learn_floor([floor_view(f) for f in _frames(video, 0, 111, 1)])
+    assert floor is not None and floor.texture_low is not None
+    later = _frames(video, 111, 222, 5)
+    plain = float(np.median([floor.hidden(f) for f in later]))
+    boxed = []
+    for f in later:
+        f = f.copy()
+        h, w = f.shape[:2]
+        f[h // 2:, w // 4: 3 * w // 4] = (40, 160, 220)
+        boxed.append(f)
+    assert np.median([floor.hidden(f) for f in boxed]) >= plain + 0.3
+    colour_alone = replace(floor, texture_low=None)
+    assert np.median([colour_alone.hidden(f) for f in boxed]) <= plain + 0.05  # what the grain adds
+
+
 def test_the_floor_raises_the_occlusion_never_lowers_it_and_unknown_stays_worst(robocar, shared_data):
     frame = _frames(shared_data / ROBOCAR, 1400, 1401, 1)[0]
     wall = frame.copy()
