@@ -25,7 +25,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-from tests.perturb import not_frozen, with_box  # noqa: E402  (one home for the perturbations)
+from tests.perturb import watched, with_box  # noqa: E402  (one home for the perturbations)
 
 import fearguard as fg  # noqa: E402
 
@@ -43,15 +43,6 @@ def boxed(img: np.ndarray, place: tuple[float, float], size: float, colour: tupl
     h, w = img.shape[:2]
     half_u, half_v = size / 2, 0.45 * size * w / h / 2
     return with_box(img, (place[0] - half_u, place[1] - half_v, place[0] + half_u, place[1] + half_v), colour)
-
-
-def watched(guard: fg.FearGuard, frames: list[np.ndarray], start: int = 0) -> fg.Command:
-    """The command after the frames (``not_frozen``: a real camera never repeats its bytes)."""
-    cmd = None
-    for i, frame in enumerate(frames, start):
-        cmd = guard.step(fg.Observation(t_s=0.05 * i, speed_mps=1.0, frame=not_frozen(frame, i)))
-    assert cmd is not None
-    return cmd
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,9 +1,12 @@
-"""Synthetic perturbations of real frames (over-exposure, darkness, an occluding vehicle) for perception tests."""
+"""Synthetic perturbations of real frames (over-exposure, darkness, an occluding vehicle) for perception tests, and a
+supervisor watching them (``watched``)."""
 
 from __future__ import annotations
 
 import cv2
 import numpy as np
+
+import fearguard as fg
 
 
 def over_exposed(frame: np.ndarray, gain: float = 3.0, offset: float = 60.0) -> np.ndarray:
@@ -69,3 +72,12 @@ def not_frozen(frame: np.ndarray, i: int) -> np.ndarray:
     out = frame.copy()
     out[0, 0] = i % 256
     return out
+
+
+def watched(guard: fg.FearGuard, frames: list[np.ndarray], start: int = 0) -> fg.Command:
+    """The guard's command after it watched the frames at 20 Hz, 1 m/s (``not_frozen`` each: frame ``start`` first)."""
+    cmd = None
+    for i, frame in enumerate(frames, start):
+        cmd = guard.step(fg.Observation(t_s=0.05 * i, speed_mps=1.0, frame=not_frozen(frame, i)))
+    assert cmd is not None
+    return cmd

@@ -12,7 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from tests.perturb import OCCLUDER_BOXES, OCCLUDER_COLOURS, garbage_frames, not_frozen, with_box
+from tests.perturb import OCCLUDER_BOXES, OCCLUDER_COLOURS, garbage_frames, watched, with_box
 
 import fearguard as fg
 
@@ -31,21 +31,13 @@ def _guard() -> fg.FearGuard:
     return fg.FearGuard(fg.HoughLaneSteering(), vehicle=fg.VehicleLimits(has_ultrasonic=False, has_qr_localisation=False))
 
 
-def _run(guard: fg.FearGuard, frames: list[np.ndarray], start: int = 0) -> fg.Command:
-    cmd = None
-    for i, frame in enumerate(frames, start):
-        cmd = guard.step(fg.Observation(t_s=0.05 * i, speed_mps=1.0, frame=not_frozen(frame, i)))
-    assert cmd is not None
-    return cmd
-
-
 @pytest.fixture(scope="module")
 def warmed(stills):
     """Per still: a supervisor that watched it for WARM_FRAMES frames, and its command then."""
     out = {}
     for name, img in stills.items():
         guard = _guard()
-        out[name] = (guard, _run(guard, [img] * WARM_FRAMES))
+        out[name] = (guard, watched(guard, [img] * WARM_FRAMES))
     return out
 
 
@@ -70,7 +62,7 @@ def test_occluders_of_any_colour_raise_occlusion_and_fear(warmed, stills):
         for box_name, box in OCCLUDER_BOXES.items():
             for colour_name, colour in OCCLUDER_COLOURS.items():
                 occluded = with_box(stills[name], box, colour)
-                cmd = _run(copy.deepcopy(guard), [occluded] * OCCLUDED_FRAMES, WARM_FRAMES)
+                cmd = watched(copy.deepcopy(guard), [occluded] * OCCLUDED_FRAMES, WARM_FRAMES)
                 cases += 1
                 if not (cmd.cues.occlusion >= 0.3 and cmd.fear >= clean.fear + 0.2):
                     failures.append(f"{name} {box_name} {colour_name}: occlusion {cmd.cues.occlusion:.2f}, "
@@ -87,7 +79,7 @@ def test_garbage_frames_give_no_confidence(shared_data: Path):
     high = []
     for name, frame in frames.items():
         alone = fg.analyze_frame(frame).lane_confidence
-        tracked = _run(_guard(), [frame] * 4).cues.lane_confidence
+        tracked = watched(_guard(), [frame] * 4).cues.lane_confidence
         if not (alone < 0.3 and tracked < 0.3):
             high.append(f"{name}: {alone:.2f} alone, {tracked:.2f} tracked")
     assert not high, "\n".join(high)
@@ -109,7 +101,7 @@ def test_something_in_the_lane_that_hides_no_boundary_hides_the_lane_beyond_it(w
     for name, (guard, clean) in warmed.items():
         for box_name, box in IN_LANE_BOXES.items():
             for colour_name, colour in colours.items():
-                cmd = _run(copy.deepcopy(guard), [with_box(stills[name], box, colour)] * OCCLUDED_FRAMES, WARM_FRAMES)
+                cmd = watched(copy.deepcopy(guard), [with_box(stills[name], box, colour)] * OCCLUDED_FRAMES, WARM_FRAMES)
                 cases += 1
                 if not (cmd.cues.occlusion >= 0.3 and cmd.fear >= clean.fear + 0.2):
                     failures.append(f"{name} {box_name} {colour_name}: occlusion {cmd.cues.occlusion:.2f}, "
