@@ -16,7 +16,7 @@ FLOORS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("plain values", ("fearguard.errors", "fearguard.readings", "fearguard.cues", "fearguard.fear", "fearguard.observation",
                       "fearguard.lane", "fearguard.camera", "fearguard.vehicle", "fearguard.files.")),
     ("measurement", ("fearguard.vision.", "fearguard.sensors.", "fearguard.track", "fearguard.track.features",
-                     "fearguard.track.floor", "fearguard.track.profile", "fearguard.track.reading")),
+                     "fearguard.track.floor", "fearguard.track.light", "fearguard.track.profile", "fearguard.track.reading")),
     ("perception", ("fearguard.perception",)),
     ("fear and policy", ("fearguard.fuzzy.", "fearguard.policy.", "fearguard.policy")),
     ("supervisor", ("fearguard.supervisor", "fearguard.steering_deadline")),

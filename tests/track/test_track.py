@@ -97,6 +97,30 @@ def test_a_dim_room_is_normal_for_the_car_that_learnt_it_and_a_blackout_is_not(r
     assert dim.brightness_as_learnt(4.0, (80.0, 180.0)) < 20.0  # the rule file's dark
 
 
+@settings(max_examples=12, deadline=None)
+@given(st.floats(0.2, 0.4), st.integers(0, 9))
+def test_lights_switched_off_are_unfamiliar_in_a_room_whose_own_frames_are_dark_below_a_bright_window(
+    robocar_track, shared_data, factor, offset
+):
+    """The robocar's room has frames facing a sunset window (the floor dark, the window blown out): a mean brightness
+    band holds darkened frames too. The light's shape does not: every grey level lower alike is no frame it learnt."""
+    frames = _frames(shared_data / ROBOCAR, 1350 + offset, 2600, 25)
+    lit = [robocar_track.familiarity(f)[0] for f in frames]
+    dark = [robocar_track.familiarity((f.astype(np.float32) * factor).astype(np.uint8))[0] for f in frames]
+    assert np.median(lit) >= 0.8
+    assert np.mean(np.array(dark) < 0.8) >= 0.9 and np.median(dark) < 0.5, sorted(dark)
+
+
+def test_a_dim_arena_learnt_stays_familiar_and_the_same_arena_darker_still_is_not(shared_data):
+    """A dark carpet arena (mean grey ~55) is normal for the car that learnt it; the same frames at 0.3 are not."""
+    track = learn_track([shared_data / TUB], LearnOptions(stop="1200f", every=2)).profile
+    frames = _frames(shared_data / TUB, 1300, 2500, 40)
+    lit = [track.familiarity(f)[0] for f in frames]
+    dark = [track.familiarity((f.astype(np.float32) * 0.3).astype(np.uint8))[0] for f in frames]
+    assert np.median(lit) >= 0.8
+    assert np.mean(np.array(dark) < 0.5) >= 0.9, sorted(dark)
+
+
 def test_the_tub_s_standing_frames_are_not_learnt(shared_data):
     learnt = learn_track([shared_data / TUB], LearnOptions(stop="400f"))
     assert learnt.frames_standing > 0 and learnt.profile.frames_learnt == learnt.frames_read - learnt.frames_standing
@@ -135,6 +159,9 @@ def _arrays(track: fg.TrackProfile, tmp_path: Path) -> dict[str, np.ndarray]:
     ("format", np.array("something-else"), "format"), ("version", np.array(99), "version"), ("bank", None, "bank"),
     ("mean", np.zeros(3), "mean"), ("calibration_distances", np.array([np.nan]), "calibration_distances"),
     ("brightness_band", np.array([200.0, 100.0]), "brightness_band"), ("basis", np.array(["a", "b"]), "basis"),
+    ("light_levels", None, "light_levels"), ("light_levels", np.zeros((3, 3)), "light_levels"),
+    ("light_levels", np.full((3, 4), 2.0), "light_levels"), ("light_calibration", np.array([-1.0]), "light_calibration"),
+    ("light_calibration", np.zeros(0), "light_calibration"),
 ])
 def test_a_wrong_profile_names_its_key(robocar_track, tmp_path, key, value, says):
     data = _arrays(robocar_track, tmp_path)
@@ -147,6 +174,37 @@ def test_a_wrong_profile_names_its_key(robocar_track, tmp_path, key, value, says
     with pytest.raises(FileError, match=says) as err:
         load_track(path)
     assert str(path) in str(err.value)
+
+
+def test_a_profile_learnt_before_the_light_reads_the_layout_alone(robocar_track, shared_data, tmp_path):
+    data = {k: v for k, v in _arrays(robocar_track, tmp_path).items() if not k.startswith("light_")}
+    old = profile_from_arrays(data, "old.npz")
+    assert old.light is None
+    back = load_track(save_track(robocar_track, tmp_path / "t.npz"))
+    assert np.array_equal(back.light.levels, robocar_track.light.levels)
+    assert np.array_equal(back.light.calibration, robocar_track.light.calibration)
+    frame = _frames(shared_data / ROBOCAR, 1400, 1401, 1)[0]
+    dark = (frame.astype(np.float32) * 0.3).astype(np.uint8)
+    assert old.familiarity(dark)[0] == old.familiarity_of(old.distance(frame_features(dark)))
+    fam, why = robocar_track.familiarity(dark)
+    assert fam <= old.familiarity(dark)[0] and "the light is unlike the learnt light: darker" in why
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.sampled_from(["light_levels", "light_calibration"]),
+       st.one_of(st.integers(-3, 300).map(np.array), st.text(max_size=5).map(np.array),
+                 st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=8).map(np.array),
+                 st.lists(st.lists(st.floats(-1.0, 2.0), min_size=4, max_size=4), max_size=3).map(np.array)))
+def test_hostile_light_arrays_are_a_profile_or_a_file_error(robocar_track, tmp_path_factory, key, value):
+    data = _arrays(robocar_track, tmp_path_factory.mktemp("light"))
+    data[key] = value
+    try:
+        track = profile_from_arrays(data, "hostile.npz")
+    except FileError as err:
+        assert key in str(err)
+        return
+    fam, _ = track.familiarity(np.full((120, 160, 3), 90, np.uint8))
+    assert 0.0 <= fam <= 1.0
 
 
 @settings(max_examples=60, deadline=None)

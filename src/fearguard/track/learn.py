@@ -9,7 +9,8 @@ below ``MOVING_THROTTLE``) are not normal driving and are left out. From the res
 - the normal light: the ``BAND_PERCENTILES`` of the brightness cue as the camera pipeline measures it;
 - the camera's lane confidence on this track (its median), how much of the marking region its occlusion measure calls
   hidden in normal driving (``OCCLUSION_PERCENTILE``), and the colours of the track's markings;
-- the floor: its colours and where the picture usually shows it (``floor.py``).
+- the floor: its colours and where the picture usually shows it (``floor.py``);
+- the light's shape: each learnt frame's grey levels (``light.py``), calibrated like the familiarity.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from fearguard.replay.recordings import open_recording
 from fearguard.replay.sources import parse_position
 from fearguard.track.features import frame_features
 from fearguard.track.floor import FloorView, floor_view, learn_floor
+from fearguard.track.light import LightModel, frame_light
 from fearguard.track.profile import (
     BAND_PERCENTILES,
     CALIBRATION_GAP_S,
@@ -84,12 +86,13 @@ class _Frames:
     marking_pixels: list[np.ndarray]
     floor: list[FloorView]
     typical: list[np.ndarray]
+    light: list[np.ndarray]  # each learnt frame's light (``light.frame_light``)
 
 
 def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnOptions(),
                 on_frame: Callable[[int], None] | None = None) -> Learnt:
     """Learn a profile from recordings of normal driving (raises ``FearguardError`` when there is too little)."""
-    got = _Frames([], [], [], [], [], [], [], [], [])
+    got = _Frames([], [], [], [], [], [], [], [], [], [])
     read = standing = skipped = 0
     for rec_id, path in enumerate(recordings):
         source = open_recording(path, options.fps)
@@ -110,6 +113,7 @@ def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnO
                 skipped += 1
                 continue
             got.features.append(f)
+            got.light.append(frame_light(frame.image_bgr))
             got.recording.append(rec_id)
             got.t_s.append(frame.t_s)
             if k % stride == 0:
@@ -155,6 +159,8 @@ def _fit(got: _Frames, source: str) -> TrackProfile:
     keep = np.unique(np.linspace(0, len(feats) - 1, min(BANK_MAX, len(feats))).astype(int))
     bank = embedded[keep]
     calib = _calibration(embedded, keep, np.array(got.recording), np.array(got.t_s))
+    light = np.array(got.light)
+    light_calib = _calibration(light, keep, np.array(got.recording), np.array(got.t_s))
     b = np.array([x for x in got.brightness if math.isfinite(x)])
     band = tuple(float(v) for v in np.percentile(b, BAND_PERCENTILES)) if b.size else (0.0, 255.0)
     lanes = np.array([x for x in got.lane if math.isfinite(x)])
@@ -165,7 +171,7 @@ def _fit(got: _Frames, source: str) -> TrackProfile:
         lane_confidence_median=float(np.median(lanes)) if lanes.size else math.nan,
         marking_colours_bgr=_marking_colours(got.marking_pixels),
         occlusion_usual=float(np.percentile(occ, OCCLUSION_PERCENTILE)) if occ.size else math.nan,
-        floor=learn_floor(got.floor),
+        floor=learn_floor(got.floor), light=LightModel(light[keep], np.sort(light_calib)),
     )
 
 

@@ -14,6 +14,9 @@ distances::
     familiarity = clip((UNFAMILIAR_RATIO − d / d_ref) / (UNFAMILIAR_RATIO − 1), 0, 1)
 
 1 up to ``d_ref`` (as familiar as 95 % of the recordings), 0.5 half-way, 0 from ``UNFAMILIAR_RATIO · d_ref``.
+The frame's light (``light.py``: the shape of its grey levels) is read the same way against the learnt frames' light,
+and the cue is the lower of the two: lights switched off in a room whose own frames include a dark floor below a bright
+window are unlike its light, however like its layout.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ import numpy as np
 from fearguard.errors import FileError
 from fearguard.track.features import BLOCK_SIZES, block_slices, frame_features
 from fearguard.track.floor import FLOOR_PX, FloorModel
+from fearguard.track.light import LIGHT_PERCENTILES, LightModel, frame_light, light_words
 
 FORMAT = "fearguard-track"
 VERSION = 1
@@ -57,6 +61,7 @@ class TrackProfile:
     marking_colours_bgr: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))  # (m, 3) the track's markings, typical BGR
     occlusion_usual: float = math.nan  # [0..1] the OCCLUSION_PERCENTILE of the occlusion cue on the recordings (NaN: not measured)
     floor: FloorModel | None = None  # the floor's colours and where it usually is (None: the recordings showed no steady floor)
+    light: LightModel | None = None  # the learnt light's shape (None: a profile learnt before it; familiarity reads layout alone)
 
     @property
     def reference_distance(self) -> float:
@@ -81,10 +86,7 @@ class TrackProfile:
 
     def familiarity_of(self, distance: float) -> float:
         """The cue for a distance (module docstring); NaN stays NaN (unknown = worst)."""
-        if not math.isfinite(distance):
-            return math.nan
-        ratio = distance / max(self.reference_distance, 1e-12)
-        return float(np.clip((UNFAMILIAR_RATIO - ratio) / (UNFAMILIAR_RATIO - 1.0), 0.0, 1.0))
+        return familiarity_from(distance, self.reference_distance)
 
     def percentile_of(self, distance: float) -> float:
         """[%] of the recordings' own distances below this one (100: beyond every learnt frame)."""
@@ -100,12 +102,28 @@ class TrackProfile:
         fam = self.familiarity_of(d)
         if not math.isfinite(fam):
             return math.nan, "track: the picture's features are not finite: familiarity unknown (worst)"
-        if fam >= 1.0:
-            return fam, ""
-        where = ("beyond every learnt frame" if d > self.calibration_distances[-1]
-                 else f"at the {self.percentile_of(d):.1f}th percentile of the learnt frames")
-        return fam, (f"track: unlike the learnt track: distance {d / self.reference_distance:.2f}× the reference, "
-                     f"{where}: familiarity {fam:.2f}")
+        lit, lit_why = self._light_familiarity(frame)
+        why = ""
+        if fam < 1.0:
+            where = ("beyond every learnt frame" if d > self.calibration_distances[-1]
+                     else f"at the {self.percentile_of(d):.1f}th percentile of the learnt frames")
+            why = (f"unlike the learnt track: distance {d / self.reference_distance:.2f}× the reference, "
+                   f"{where}: familiarity {fam:.2f}")
+        said = "; ".join(w for w in (why, lit_why) if w)
+        return min(fam, lit), f"track: {said}" if said else ""
+
+    def _light_familiarity(self, frame: object) -> tuple[float, str]:
+        """The light's own familiarity (1 without a learnt light) and its sentence."""
+        light = frame_light(frame) if self.light is not None else None
+        if self.light is None or light is None:
+            return 1.0, ""
+        ref = self.light.reference(REFERENCE_PERCENTILE)
+        d = self.light.distance(light, NEIGHBOURS)
+        fam = familiarity_from(d, ref)
+        if not fam < 1.0:
+            return 1.0, ""
+        return fam, (f"the light is unlike the learnt light: {light_words(light, self.light.nearest(light))}, "
+                     f"distance {d / ref:.2f}× the reference: familiarity {fam:.2f}")
 
     def brightness_as_learnt(self, brightness: float, normal_band: tuple[float, float]) -> float:
         """The measured brightness read against the learnt light: the learnt band maps onto the rule file's normal band,
@@ -130,6 +148,14 @@ class TrackProfile:
             return occlusion
         usual = min(usual, 1.0 - BAND_EDGE / 255.0)
         return float(np.interp(occlusion, [0.0, usual, 1.0], [0.0, calm_top, 1.0]))
+
+
+def familiarity_from(distance: float, reference: float) -> float:
+    """1 up to the reference distance, 0 from ``UNFAMILIAR_RATIO`` times it, linear between; NaN stays NaN (worst)."""
+    if not math.isfinite(distance):
+        return math.nan
+    ratio = distance / max(reference, 1e-12)
+    return float(np.clip((UNFAMILIAR_RATIO - ratio) / (UNFAMILIAR_RATIO - 1.0), 0.0, 1.0))
 
 
 def load_track(path: str | Path) -> TrackProfile:
@@ -183,12 +209,23 @@ def profile_from_arrays(data: dict[str, np.ndarray], where: str) -> TrackProfile
         raise FileError(where, "occlusion_usual", f"expected a share 0..1 (or NaN), got {occ_usual!r}")
     colours = need("marking_colours_bgr", 2, 3) if "marking_colours_bgr" in data else np.zeros((0, 3))
     floor = _floor_from_arrays(data, need, where) if "floor_colours_lab" in data else None  # none before the floor model
+    light = _light_from_arrays(data, need, where) if "light_levels" in data or "light_calibration" in data else None
     return TrackProfile(
         source=str(data.get("source", "")), frames_learnt=int(need("frames_learnt", 0)), mean=mean, weights=weights,
         basis=basis, bank=bank, calibration_distances=np.sort(calib), brightness_band=(float(band[0]), float(band[1])),
         lane_confidence_median=float(lane) if np.ndim(lane) == 0 and lane.dtype.kind in "fiu" else math.nan,
-        marking_colours_bgr=colours, occlusion_usual=occ_usual, floor=floor,
+        marking_colours_bgr=colours, occlusion_usual=occ_usual, floor=floor, light=light,
     )
+
+
+def _light_from_arrays(data: dict[str, np.ndarray], need: Callable[..., np.ndarray], where: str) -> LightModel:
+    """The learnt light's keys of a saved profile, checked (profiles learnt before it have neither)."""
+    levels, calib = need("light_levels", 2, len(LIGHT_PERCENTILES)), need("light_calibration", 1)
+    if levels.shape[0] < 1 or not 0.0 <= levels.min() <= levels.max() <= 1.0:
+        raise FileError(where, "light_levels", f"expected 1 or more lights 0..1, got {levels.shape[0]} frames")
+    if calib.size < 1 or calib.min() < 0.0:
+        raise FileError(where, "light_calibration", f"expected 1 or more distances ≥ 0, got {calib.size}")
+    return LightModel(levels, np.sort(calib))
 
 
 def _floor_from_arrays(data: dict[str, np.ndarray], need: Callable[..., np.ndarray], where: str) -> FloorModel:
@@ -223,6 +260,7 @@ def save_track(profile: TrackProfile, path: str | Path) -> Path:
             brightness_band=np.array(profile.brightness_band), lane_confidence_median=np.array(profile.lane_confidence_median),
             marking_colours_bgr=profile.marking_colours_bgr, occlusion_usual=np.array(profile.occlusion_usual),
             **_floor_arrays(profile.floor),
+            **({"light_levels": profile.light.levels, "light_calibration": profile.light.calibration} if profile.light else {}),
         )
     return p
 
