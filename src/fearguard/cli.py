@@ -426,9 +426,12 @@ def _by(summary: dict) -> str:
 
 def cmd_learn(args: argparse.Namespace) -> int:
     """Recordings of normal driving → a track profile (.npz) and track.png beside it; prints what it learnt."""
+    import numpy as np
+
     from fearguard.camera import load_camera
     from fearguard.track.floor import USUAL_SHARE
     from fearguard.track.learn import LearnOptions, learn_track
+    from fearguard.track.light import LIGHT_PERCENTILES, grey_levels
     from fearguard.track.picture import draw_track
     from fearguard.track.profile import save_track
 
@@ -444,7 +447,10 @@ def cmd_learn(args: argparse.Namespace) -> int:
             "the camera's lane model does not see this track's guidance: the lane cue will read familiarity")
     print(f"learnt {p.frames_learnt} frames of {learnt.frames_read} read ({learnt.frames_standing} with the car standing or "
           f"backing left out, {learnt.skipped} unreadable)")
-    print(f"  light: brightness band {p.brightness_band[0]:.0f}–{p.brightness_band[1]:.0f} (2nd–98th percentile)")
+    print(f"  light: brightness band {p.brightness_band[0]:.0f}–{p.brightness_band[1]:.0f} (2nd–98th percentile)"
+          + ("" if p.light is None else f"; grey at the {'/'.join(f'{q:g}' for q in LIGHT_PERCENTILES)}th percentiles typically "
+             f"{'/'.join(f'{g:.0f}' for g in grey_levels(np.median(p.light.levels, axis=0)))}, reference distance "
+             f"{p.light_reference:.3f}"))
     print(f"  lane: median confidence {p.lane_confidence_median:.2f} on the recordings: {lane}")
     print(f"  markings: {colours}")
     floor = p.floor

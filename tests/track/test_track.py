@@ -238,7 +238,7 @@ def test_learn_and_replay_from_the_command_line(shared_data, tmp_path, capsys):
     out = tmp_path / "track.npz"
     assert main(["learn", str(shared_data / DEEPPICAR), "--to", "100f", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert "learnt 100 frames" in printed and "brightness band" in printed
+    assert "learnt 100 frames" in printed and "brightness band" in printed and "grey at the 10/50/90/99th percentiles" in printed
     assert out.is_file() and out.with_suffix(".png").is_file()
     assert cv2.imread(str(out.with_suffix(".png"))) is not None
     rp = tmp_path / "rp"

@@ -27,9 +27,9 @@ from fearguard.camera import CameraModel
 from fearguard.errors import FearguardError
 from fearguard.replay.recordings import open_recording
 from fearguard.replay.sources import parse_position
-from fearguard.track.features import frame_features
+from fearguard.track.features import features_of, shrink
 from fearguard.track.floor import FloorView, floor_view, learn_floor
-from fearguard.track.light import LightModel, frame_light
+from fearguard.track.light import LightModel, light_of
 from fearguard.track.profile import (
     BAND_PERCENTILES,
     CALIBRATION_GAP_S,
@@ -108,12 +108,12 @@ def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnO
             if _standing(frame.log_fields):
                 standing += 1
                 continue
-            f = frame_features(frame.image_bgr)
-            if f is None:
+            shrunk = shrink(frame.image_bgr)
+            if shrunk is None:
                 skipped += 1
                 continue
-            got.features.append(f)
-            got.light.append(frame_light(frame.image_bgr))
+            got.features.append(features_of(*shrunk))
+            got.light.append(light_of(shrunk[1]))
             got.recording.append(rec_id)
             got.t_s.append(frame.t_s)
             if k % stride == 0:

@@ -24,14 +24,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
 from fearguard.errors import FileError
-from fearguard.track.features import BLOCK_SIZES, block_slices, frame_features
+from fearguard.track.features import BLOCK_SIZES, block_slices, features_of, shrink
 from fearguard.track.floor import FLOOR_PX, FloorModel
-from fearguard.track.light import LIGHT_PERCENTILES, LightModel, frame_light, light_words
+from fearguard.track.light import LIGHT_PERCENTILES, REFERENCE_MIN, LightModel, light_of, light_words
 
 FORMAT = "fearguard-track"
 VERSION = 1
@@ -63,10 +64,17 @@ class TrackProfile:
     floor: FloorModel | None = None  # the floor's colours and where it usually is (None: the recordings showed no steady floor)
     light: LightModel | None = None  # the learnt light's shape (None: a profile learnt before it; familiarity reads layout alone)
 
-    @property
+    @cached_property
     def reference_distance(self) -> float:
         """d_ref: the REFERENCE_PERCENTILE-th percentile of the recordings' own distances."""
         return float(np.percentile(self.calibration_distances, REFERENCE_PERCENTILE))
+
+    @cached_property
+    def light_reference(self) -> float:
+        """The light's d_ref: the same percentile of its own distances, never below ``light.REFERENCE_MIN`` (NaN: no light)."""
+        if self.light is None:
+            return math.nan
+        return max(float(np.percentile(self.light.calibration, REFERENCE_PERCENTILE)), REFERENCE_MIN)
 
     def distance(self, features: np.ndarray) -> float:
         """Mean distance of one feature vector to its NEIGHBOURS nearest learnt frames (NaN for non-finite features)."""
@@ -95,14 +103,14 @@ class TrackProfile:
 
     def familiarity(self, frame: object) -> tuple[float, str]:
         """The cue for one frame and the sentence behind it ('' when fully familiar); NaN when it is not a picture."""
-        f = frame_features(frame)
-        if f is None:
+        shrunk = shrink(frame)
+        if shrunk is None:
             return math.nan, "track: no picture to compare with the learnt track: familiarity unknown (worst)"
-        d = self.distance(f)
+        d = self.distance(features_of(*shrunk))
         fam = self.familiarity_of(d)
         if not math.isfinite(fam):
             return math.nan, "track: the picture's features are not finite: familiarity unknown (worst)"
-        lit, lit_why = self._light_familiarity(frame)
+        lit, lit_why = self._light_familiarity(light_of(shrunk[1]))
         why = ""
         if fam < 1.0:
             where = ("beyond every learnt frame" if d > self.calibration_distances[-1]
@@ -112,12 +120,11 @@ class TrackProfile:
         said = "; ".join(w for w in (why, lit_why) if w)
         return min(fam, lit), f"track: {said}" if said else ""
 
-    def _light_familiarity(self, frame: object) -> tuple[float, str]:
+    def _light_familiarity(self, light: np.ndarray) -> tuple[float, str]:
         """The light's own familiarity (1 without a learnt light) and its sentence."""
-        light = frame_light(frame) if self.light is not None else None
-        if self.light is None or light is None:
+        if self.light is None:
             return 1.0, ""
-        ref = self.light.reference(REFERENCE_PERCENTILE)
+        ref = self.light_reference
         d = self.light.distance(light, NEIGHBOURS)
         fam = familiarity_from(d, ref)
         if not fam < 1.0:
