@@ -86,7 +86,7 @@ class _Frames:
     marking_pixels: list[np.ndarray]
     floor: list[FloorView]
     typical: list[np.ndarray]
-    light: list[np.ndarray]  # each learnt frame's light (``light.frame_light``)
+    light: list[np.ndarray]  # each learnt frame's light (``light.light_of``)
 
 
 def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnOptions(),
@@ -158,9 +158,9 @@ def _fit(got: _Frames, source: str) -> TrackProfile:
     embedded = partial.embed(feats)
     keep = np.unique(np.linspace(0, len(feats) - 1, min(BANK_MAX, len(feats))).astype(int))
     bank = embedded[keep]
-    calib = _calibration(embedded, keep, np.array(got.recording), np.array(got.t_s))
-    light = np.array(got.light)
-    light_calib = _calibration(light, keep, np.array(got.recording), np.array(got.t_s))
+    recording, t_s, light = np.array(got.recording), np.array(got.t_s), np.array(got.light)
+    calib = _calibration(embedded, keep, recording, t_s)
+    light_calib = _calibration(light, keep, recording, t_s)
     b = np.array([x for x in got.brightness if math.isfinite(x)])
     band = tuple(float(v) for v in np.percentile(b, BAND_PERCENTILES)) if b.size else (0.0, 255.0)
     lanes = np.array([x for x in got.lane if math.isfinite(x)])

@@ -9,7 +9,8 @@ the second half ×0.3), the light alone reads every darkened frame unfamiliar (<
 of the lit second half there (docs/learning.md, "The light").
 
 Pure functions of the pixels, and one frozen value: the learnt frames' light and the recordings' own distances, which
-``TrackProfile`` reads with the same calibrated mapping as its familiarity (its reference never below ``REFERENCE_MIN``).
+``TrackProfile`` reads with the same nearest-frames distance and calibrated mapping as its familiarity (its reference
+never below ``REFERENCE_MIN``).
 """
 
 from __future__ import annotations
@@ -18,8 +19,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-
-from fearguard.track.features import shrink
 
 LIGHT_PERCENTILES = (10.0, 50.0, 90.0, 99.0)  # [%] of the grey levels: the dark part, the middle, the bright part, highlights
 LOG_GREY = math.log(256.0)  # log(1 + 255): the light's scale, 0..1
@@ -35,28 +34,15 @@ class LightModel:
     levels: np.ndarray  # (M, len(LIGHT_PERCENTILES)) learnt frames' light, 0..1
     calibration: np.ndarray  # (C,) sorted: each calibration frame's distance to learnt frames away from it in time
 
-    def distance(self, light: np.ndarray, neighbours: int) -> float:
-        """Mean distance of one frame's light to its ``neighbours`` nearest learnt frames' (NaN for a non-finite one)."""
-        if not np.all(np.isfinite(light)):
-            return math.nan
-        d2 = ((self.levels - light) ** 2).sum(axis=1)
-        k = min(neighbours, d2.size)
-        return float(np.sqrt(np.partition(d2, k - 1)[:k]).mean())
-
     def nearest(self, light: np.ndarray) -> np.ndarray:
         """The learnt frame's light nearest to this one (for the reasons)."""
         return self.levels[int(np.argmin(((self.levels - light) ** 2).sum(axis=1)))]
 
 
-def frame_light(frame: object) -> np.ndarray | None:
-    """One frame's light (``LIGHT_PERCENTILES`` of its grey levels, log scale 0..1), or None when it is not a picture."""
-    shrunk = shrink(frame)
-    return None if shrunk is None else light_of(shrunk[1])
-
-
 def light_of(grey: np.ndarray) -> np.ndarray:
-    """The light of a grey picture (uint8): the lowest grey level reached by each of ``LIGHT_PERCENTILES`` of its pixels,
-    on the log scale (a histogram's cumulative count: 20 µs where np.percentile takes 66)."""
+    """The light of a frame's grey at ``features.WORK_PX`` (``features.shrink``; uint8): the lowest grey level reached
+    by each of ``LIGHT_PERCENTILES`` of its pixels, on the log scale (a histogram's cumulative count: 20 µs where
+    np.percentile takes 66)."""
     counts = np.cumsum(np.bincount(np.asarray(grey, dtype=np.uint8).ravel(), minlength=256))
     levels = np.searchsorted(counts, np.array(LIGHT_PERCENTILES) / 100.0 * counts[-1], side="left")
     return np.log1p(levels.astype(np.float64)) / LOG_GREY

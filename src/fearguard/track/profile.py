@@ -78,12 +78,7 @@ class TrackProfile:
 
     def distance(self, features: np.ndarray) -> float:
         """Mean distance of one feature vector to its NEIGHBOURS nearest learnt frames (NaN for non-finite features)."""
-        q = self.embed(features[None, :])[0]
-        if not np.all(np.isfinite(q)):
-            return math.nan
-        d2 = np.einsum("ij,ij->i", self.bank - q, self.bank - q)
-        k = min(NEIGHBOURS, d2.size)
-        return float(np.sqrt(np.partition(d2, k - 1)[:k]).mean())
+        return nearest_mean(self.bank, self.embed(features[None, :])[0])
 
     def embed(self, features: np.ndarray) -> np.ndarray:
         """(N, F) features → (N, k + 1): the projection on the components and the length they leave unexplained."""
@@ -125,7 +120,7 @@ class TrackProfile:
         if self.light is None:
             return 1.0, ""
         ref = self.light_reference
-        d = self.light.distance(light, NEIGHBOURS)
+        d = nearest_mean(self.light.levels, light)
         fam = familiarity_from(d, ref)
         if not fam < 1.0:
             return 1.0, ""
@@ -155,6 +150,16 @@ class TrackProfile:
             return occlusion
         usual = min(usual, 1.0 - BAND_EDGE / 255.0)
         return float(np.interp(occlusion, [0.0, usual, 1.0], [0.0, calm_top, 1.0]))
+
+
+def nearest_mean(bank: np.ndarray, q: np.ndarray) -> float:
+    """Mean distance of ``q`` to its NEIGHBOURS nearest rows of ``bank`` (NaN for a non-finite ``q``): the familiarity's
+    distance and the light's."""
+    if not np.all(np.isfinite(q)):
+        return math.nan
+    d2 = np.einsum("ij,ij->i", bank - q, bank - q)
+    k = min(NEIGHBOURS, d2.size)
+    return float(np.sqrt(np.partition(d2, k - 1)[:k]).mean())
 
 
 def familiarity_from(distance: float, reference: float) -> float:
