@@ -402,6 +402,9 @@ def _print_replay_summary(summary: dict, out_dir: object) -> None:
         longest = max(pauses, key=lambda p: p["paused_s"])
         print(f"note: {len(pauses)} recording pause(s) (a Donkey tub records only while the car drives): the supervisor "
               f"started afresh after each; longest {longest['paused_s']:.1f} s before frame {longest['frame']}")
+    advice = (summary.get("eyes_check") or {}).get("advice")
+    if advice:
+        print(f"note: {advice}")
     if summary.get("skipped"):
         print(f"note: {len(summary['skipped'])} frame(s) skipped, first: {summary['skipped'][0]['reason']}")
     for issue in summary.get("sensor_log_issues", [])[:10]:

@@ -34,6 +34,7 @@ from fearguard.outputs.recorder import CommandStats, Recorder
 from fearguard.outputs.report import json_value
 from fearguard.policy.speed import watchdog_s
 from fearguard.replay.bags import BagSource, BagTopics
+from fearguard.replay.eyes import EyesCheck
 from fearguard.replay.pitch import PitchCheck
 from fearguard.replay.read_ahead import read_ahead, usable_cores
 from fearguard.replay.recordings import open_recording
@@ -104,9 +105,10 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     frames = source.iter_frames(start, stop_at, options.every)
     ahead = options.read_ahead if options.read_ahead is not None else usable_cores() > 1
     pitch = PitchCheck(camera)
+    eyes = EyesCheck(guard.rules.policy.recovery_min_confidence, camera=camera is not None, track=options.track is not None)
     pause_s = watchdog_s(options.every / source.fps, guard.rules.policy) if source.kind == "tub" else None
     world = RecordingWorld(read_ahead(frames) if ahead else frames, source.fps / options.every, log_data, options.speed_mps, pitch,
-                           pause_s)
+                           pause_s, eyes)
     began = time.perf_counter()
     recorder = Recorder(out, fps=world.fps, video=options.video, mcap=options.mcap)
     ran = run(world, Guarded(guard), recorder, stop=stop, on_frame=on_frame, total=expected)  # closing the world stops the reader
@@ -131,6 +133,7 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     if recorder.mcap_path is not None:
         summary["mcap"] = {"path": str(recorder.mcap_path), "frames": done}
     summary["pitch_check"] = pitch.finish().to_json()
+    summary["eyes_check"] = eyes.finish().to_json()
     if isinstance(source, BagSource):
         summary["bag_topics"] = dict(source.topics_used)
     summary = json_value(summary)
@@ -164,13 +167,14 @@ def _expected(total: int | None, start: int, stop: int | None, every: int) -> in
 class RecordingWorld:
     """A recording as a ``World``: its frames with the sensor readings of their times (a sensor log, or a bag's own
     topics); ``act`` moves nothing (open loop: the recording's motion is fixed) but checks the camera's pitch against
-    the lane lines. ``pause_s``: a gap longer than this between frames is a pause of the recording (``pauses``: frame,
-    seconds), the next frame ``Sensed.resumed_after_s``; None: every gap is the car's own (a stall, if long). Closing it
-    stops the reader and closes the source."""
+    the lane lines and counts how much of the lane the camera saw (``eyes``). ``pause_s``: a gap longer than this
+    between frames is a pause of the recording (``pauses``: frame, seconds), the next frame ``Sensed.resumed_after_s``;
+    None: every gap is the car's own (a stall, if long). Closing it stops the reader and closes the source."""
 
     def __init__(self, frames: Iterator[Frame], fps: float, log: Readings | None, speed_mps: float | None,
-                 pitch: PitchCheck | None = None, pause_s: float | None = None) -> None:
+                 pitch: PitchCheck | None = None, pause_s: float | None = None, eyes: EyesCheck | None = None) -> None:
         self.frames, self.fps, self.log, self.speed_mps, self.pitch, self.pause_s = frames, fps, log, speed_mps, pitch, pause_s
+        self.eyes = eyes
         self.pauses: list[tuple[int, float]] = []
         self._frame: Frame | None = None
         self._last_t_s: float | None = None
@@ -192,6 +196,8 @@ class RecordingWorld:
         assert frame is not None  # act follows the sense that read it
         if self.pitch is not None:
             self.pitch.add(frame.t_s, decision.analysis, (frame.image_bgr.shape[1], frame.image_bgr.shape[0]))
+        if self.eyes is not None:
+            self.eyes.add(decision.command)
         resumed = {} if sensed.resumed_after_s is None else {"resumed_after_s": sensed.resumed_after_s}
         return Outcome({"source_frame": frame.source_frame, **resumed, **frame.log_fields}, f"t {sensed.t_s:.1f} s",
                        stamp_ns=frame.stamp_ns)

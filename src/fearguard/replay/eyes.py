@@ -1,0 +1,91 @@
+"""Did the camera's lane model see this recording's road? A replay's advice when it hardly did.
+
+A model car's camera replayed with no camera file and no learnt track usually reads lane confidence 0 on frame after
+frame (issue 33's table: clean frames calm on 0 % of most model-car sources) — the road region without a camera model
+is a dash-cam's (the road from 62 to 93 % of the picture's height, narrowing toward the middle) and a low, wide
+camera sees its track elsewhere — and the replay then says only "EMERGENCY 94 %". Over the whole replay this counts
+the frames on which the lane was seen at all (``lane_confidence`` at least the rule file's
+``recovery_min_confidence``, the confidence from which a creep steers by the lane seen now: one owner for "seen") and
+the frames the road picture held the car in EMERGENCY. When the lane was seen on fewer than ``SEEN_SHARE_MIN`` of the
+frames, the road caused most of the EMERGENCY, and no track profile was given, the summary's ``eyes_check`` carries
+advice naming what would help: a profile learnt from the user's own driving (``fearguard learn``, docs/learning.md) and
+the camera's pose (``--camera``). It changes nothing in the replay itself.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from fearguard.fear import Cause
+from fearguard.supervisor import Command
+from fearguard.vision.lanes import BOTTOM_FRACTION, TOP_FRACTION
+
+SEEN_SHARE_MIN = 0.2  # [-] of the frames: the lane seen on fewer than this is a recording the camera's lane model cannot read
+ROAD_EMERGENCY_SHARE_MIN = 0.5  # [-] of the frames: ... when the road picture held the car in EMERGENCY on at least this many
+_BINS = 100  # lane confidences counted in hundredths (constant memory over any length of recording)
+
+
+@dataclass(frozen=True)
+class EyesVerdict:
+    """What the replay's camera saw of the lane; ``advice`` when it hardly saw it (None otherwise)."""
+
+    frames: int  # frames with a lane confidence
+    lane_seen_share: float | None  # of those frames: lane confidence >= the seen threshold (None: no frame)
+    lane_confidence_median: float | None  # to the hundredth
+    road_emergency_share: float | None  # of the supervised frames: EMERGENCY with the road picture its cause
+    seen_threshold: float
+    advice: str | None
+
+    def to_json(self) -> dict[str, Any]:
+        return {"frames": self.frames, "lane_seen_share": self.lane_seen_share, "lane_confidence_median": self.lane_confidence_median,
+                "road_emergency_share": self.road_emergency_share, "seen_threshold": self.seen_threshold, "advice": self.advice}
+
+
+class EyesCheck:
+    """Fed each frame's Command (``add``); ``finish`` gives the verdict. ``camera``/``track``: whether the replay had a
+    camera file and a track profile (the advice names what is missing)."""
+
+    def __init__(self, seen_threshold: float, camera: bool, track: bool) -> None:
+        self.seen_threshold, self._camera, self._track = seen_threshold, camera, track
+        self._counts = np.zeros(_BINS + 1, np.int64)  # lane confidence in hundredths
+        self._supervised = 0
+        self._road_emergency = 0
+        self._seen = 0
+
+    def add(self, command: Command | None) -> None:
+        if command is None:
+            return
+        self._supervised += 1
+        if command.mode.name == "EMERGENCY" and command.cause is Cause.ROAD:
+            self._road_emergency += 1
+        confidence = command.cues.lane_confidence
+        if confidence == confidence:  # NaN (no picture) is no reading of the lane
+            self._counts[round(min(1.0, max(0.0, confidence)) * _BINS)] += 1
+            self._seen += confidence >= self.seen_threshold
+
+    def finish(self) -> EyesVerdict:
+        n = int(self._counts.sum())
+        if n == 0:
+            return EyesVerdict(0, None, None, None, self.seen_threshold, None)
+        seen = self._seen / n
+        median = float(np.searchsorted(np.cumsum(self._counts), 0.5 * n)) / _BINS
+        road = self._road_emergency / self._supervised if self._supervised else 0.0
+        advice = None
+        if seen < SEEN_SHARE_MIN and road >= ROAD_EMERGENCY_SHARE_MIN and not self._track:
+            advice = (f"the lane was seen (lane confidence >= {self.seen_threshold:g}) on {100 * seen:.0f} % of frames "
+                      f"(median {median:.2f}) and the road picture held the car in EMERGENCY on {100 * road:.0f} %: "
+                      + _what_helps(self._camera))
+        return EyesVerdict(n, seen, median, road, self.seen_threshold, advice)
+
+
+def _what_helps(camera: bool) -> str:
+    learn = ("learn this track from a recording of normal driving (`fearguard learn RECORDING --out track.npz`, then "
+             "`--track track.npz`; docs/learning.md)")
+    if camera:
+        return f"this track's guidance is not what the camera's lane model looks for; {learn}"
+    return (f"without a camera file the lane model looks where a dash-cam sees the road ({100 * TOP_FRACTION:.0f}-"
+            f"{100 * BOTTOM_FRACTION:.0f} % of the picture's height, narrowing toward the middle); {learn}, or give the camera's "
+            f"pose (`--camera camera.toml`, `fearguard calibrate`)")
