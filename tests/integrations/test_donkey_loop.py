@@ -35,7 +35,7 @@ from donkeycar.parts.tub_v2 import Tub, TubWriter  # noqa: E402
 from donkeycar.templates.complete import DriveMode  # noqa: E402
 from donkeycar.vehicle import Vehicle  # noqa: E402
 
-from fearguard.integrations.donkey import FearGuardPart  # noqa: E402
+from fearguard.integrations.donkey import EYES_LOOPS, FearGuardPart  # noqa: E402
 from fearguard.replay.run import ReplayOptions, replay  # noqa: E402
 
 VIDEO = "road/video/solidWhiteRight.mp4"
@@ -304,9 +304,9 @@ class TubCamera(BaseCamera):
     """A threaded camera part playing a tub's images from record ``start`` at 20 Hz (RGB, as a Pi camera gives), and
     the driver's recorded angle and throttle with each frame (what the pilot would have said)."""
 
-    def __init__(self, tub_path: Path, start: int, fps: float = 20.0) -> None:
+    def __init__(self, tub_path: Path, start: int, fps: float = 20.0, count: int | None = None) -> None:
         tub = Tub(str(tub_path), read_only=True)
-        self.records = [r for r in tub if int(r["_index"]) >= start and "cam/image_array" in r]
+        self.records = [r for r in tub if int(r["_index"]) >= start and "cam/image_array" in r][:count]
         self.images = tub_path / "images"
         self.period_s = 1.0 / fps
         self.frame, self.commands = None, (None, None)
@@ -333,19 +333,11 @@ class TubCamera(BaseCamera):
         self.on = False
 
 
-def test_a_learnt_track_lets_the_car_drive_its_own_tub_in_the_real_loop(shared_data, tmp_path, cfg):
-    """Issue 34: `fearguard learn` on the first half of a real tub, FEARGUARD_TRACK in the stock loop replaying the second
-    half at 20 Hz as camera and pilot: the loop keeps its rate, the car keeps (nearly) the pilot's throttle."""
-    from fearguard.track.learn import LearnOptions, learn_track
-    from fearguard.track.profile import save_track
-
-    tub = shared_data / TUB
-    half = len(Tub(str(tub), read_only=True)) // 2
-    track = save_track(learn_track([tub], LearnOptions(stop=f"{half}f")).profile, tmp_path / "track.npz")
-    cfg.FEARGUARD_TRACK = str(track)
-    cfg.FEARGUARD_PRESET = "donkey"
+def tub_drive(cfg: Config, tub: Path, start: int, count: int | None = None) -> dict:
+    """The stock loop with the tub from record ``start`` (``count`` records, or to its end) as camera and pilot at 20 Hz,
+    FearGuardPart after DriveMode: its rows (pilot angle, throttle, part outputs), loops, seconds, CPU per call."""
     vehicle = Vehicle()
-    camera = TubCamera(tub, half)
+    camera = TubCamera(tub, start, count=count)
     vehicle.add(camera, outputs=["cam/image_array", "pilot/angle", "pilot/throttle"], threaded=True)
     vehicle.add(EndOfVideo(vehicle, camera))
     vehicle.add(DriveMode(cfg.AI_THROTTLE_MULT), inputs=["user/mode", "user/angle", "user/throttle", "pilot/angle", "pilot/throttle"],
@@ -359,15 +351,46 @@ def test_a_learnt_track_lets_the_car_drive_its_own_tub_in_the_real_loop(shared_d
     result = vehicle.start(rate_hz=cfg.DRIVE_LOOP_HZ, max_loop_count=4 * len(camera.records))
     assert result is not None, "the vehicle loop ended on an exception (see the traceback above)"
     loops, seconds = result
-    rows = [r for r in recorder.rows if r[1] is not None]
+    return {"rows": [r for r in recorder.rows if r[1] is not None], "loops": loops, "seconds": seconds,
+            "cpu_ms": 1e3 * statistics.median(timed.cpu_s[1:])}
+
+
+def test_a_learnt_track_lets_the_car_drive_its_own_tub_in_the_real_loop(shared_data, tmp_path, cfg, caplog):
+    """Issue 34: `fearguard learn` on the first half of a real tub, FEARGUARD_TRACK in the stock loop replaying the second
+    half at 20 Hz as camera and pilot: the loop keeps its rate, the car keeps (nearly) the pilot's throttle."""
+    from fearguard.track.learn import LearnOptions, learn_track
+    from fearguard.track.profile import save_track
+
+    tub = shared_data / TUB
+    half = len(Tub(str(tub), read_only=True)) // 2
+    track = save_track(learn_track([tub], LearnOptions(stop=f"{half}f")).profile, tmp_path / "track.npz")
+    cfg.FEARGUARD_TRACK = str(track)
+    cfg.FEARGUARD_PRESET = "donkey"
+    with caplog.at_level("WARNING", logger="fearguard.integrations.donkey"):
+        run = tub_drive(cfg, tub, half)
+    rows, loops, seconds, cpu_ms = run["rows"], run["loops"], run["seconds"], run["cpu_ms"]
     modes = [r[5] for r in rows]
     emergency = modes.count("EMERGENCY") / len(rows)
     pilot = sum(max(0.0, r[1]) for r in rows)
     guarded = sum(max(0.0, r[3]) for r in rows)
-    cpu_ms = 1e3 * statistics.median(timed.cpu_s[1:])
     print(f"\nlearnt track, 2nd half of {TUB}: {loops} loops in {seconds:.1f} s = {loops / seconds:.1f} Hz; EMERGENCY "
           f"{100 * emergency:.1f} % of loops; throttle {100 * guarded / pilot:.1f} % of the pilot's; part {cpu_ms:.1f} ms CPU "
           f"(median); modes { {m: modes.count(m) for m in sorted(set(modes))} }")
     assert emergency <= 0.10
     assert guarded >= 0.85 * pilot
     assert cpu_ms <= PART_CPU_SHARE * 1e3 / MIN_LOOP_HZ
+    assert not [r for r in caplog.records if "lane was seen" in r.getMessage()]  # a car with its track needs no advice
+
+
+def test_without_a_track_the_standing_car_says_once_how_to_teach_it_the_track(shared_data, cfg, caplog):
+    """The same tub without FEARGUARD_TRACK: the camera finds no lane on black tape over dark carpet and the car stands;
+    after EYES_LOOPS loops the part logs, once, what would help, in the Donkey config's words (replay/eyes.py)."""
+    cfg.FEARGUARD_PRESET = "donkey"
+    with caplog.at_level("WARNING", logger="fearguard.integrations.donkey"):
+        run = tub_drive(cfg, shared_data / TUB, 1300, count=EYES_LOOPS + 40)
+    modes = [r[5] for r in run["rows"]]
+    said = [r.getMessage() for r in caplog.records if "lane was seen" in r.getMessage()]
+    print(f"\nno track, {TUB} from record 1300: {run['loops']} loops, EMERGENCY {100 * modes.count('EMERGENCY') / len(modes):.0f} % "
+          f"of loops; said: {said}")
+    assert modes.count("EMERGENCY") >= 0.5 * len(modes)
+    assert len(said) == 1 and "FEARGUARD_TRACK" in said[0] and "fearguard learn" in said[0]

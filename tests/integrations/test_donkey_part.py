@@ -14,6 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from fearguard.integrations.donkey import (
+    EYES_LOOPS,
     FEAR_OUTPUTS,
     STARTING,
     FearGuardPart,
@@ -184,3 +185,63 @@ def test_a_failing_part_holds_the_car_still_instead_of_ending_the_loop():
     p = part()
     p.guard = None  # type: ignore[assignment]  # any internal failure
     assert p.run(grey_frame(), 0.3, 0.8) == (0.0, 0.0, 1.0, "FAULT", 0.0)
+
+
+TUB_IMAGES = "modelcar/donkey-carpet-dark/images"  # black tape on dark carpet, the tub's 160x120 RGB frames
+
+
+def _tub_frames(shared_data, start: int, count: int) -> list[np.ndarray]:
+    """The tub's camera frames from record ``start`` on, as a Donkey camera delivers them (RGB)."""
+    import cv2
+
+    folder = shared_data / TUB_IMAGES
+    return [cv2.cvtColor(cv2.imread(str(folder / f"{i}_cam_image_array_.jpg")), cv2.COLOR_BGR2RGB)
+            for i in range(start, start + count)]
+
+
+def _drive(p: FearGuardPart, frames: list[np.ndarray]) -> None:
+    for frame in frames:
+        p.run(frame, 0.0, 0.4)
+
+
+def test_a_car_whose_camera_hardly_sees_the_lane_says_once_what_would_help(shared_data, caplog):
+    """replay/eyes.py in the part: the tub's own frames, no FEARGUARD_TRACK and no FEARGUARD_CAMERA — the car stands in
+    EMERGENCY, and after EYES_LOOPS loops one warning names the Donkey config keys that would let it drive."""
+    frames = _tub_frames(shared_data, 1300, EYES_LOOPS)
+    p = part(FEARGUARD_PRESET="donkey", FEARGUARD_MAX_SPEED_MPS=2.0)
+    with caplog.at_level("WARNING", logger="fearguard.integrations.donkey"):
+        _drive(p, frames[:-1])
+        assert not [r for r in caplog.records if "lane was seen" in r.getMessage()]  # not before the window has passed
+        _drive(p, frames[-1:] + frames[:50])  # the window ends, then more loops
+    said = [r.getMessage() for r in caplog.records if "lane was seen" in r.getMessage()]
+    assert len(said) == 1, said
+    assert "FEARGUARD_TRACK" in said[0] and "FEARGUARD_CAMERA" in said[0] and "fearguard learn" in said[0]
+    assert "--track" not in said[0] and "--camera" not in said[0]  # the config's words, not the command line's
+
+
+def test_with_a_learnt_track_or_a_readable_road_the_part_stays_quiet(shared_data, tmp_path, caplog):
+    from fearguard.track.learn import LearnOptions, learn_track
+    from fearguard.track.profile import save_track
+
+    track = save_track(learn_track([shared_data / "modelcar/donkey-carpet-dark"], LearnOptions(stop="1200f", every=2)).profile,
+                       tmp_path / "track.npz")
+    with caplog.at_level("WARNING", logger="fearguard.integrations.donkey"):
+        _drive(part(FEARGUARD_PRESET="donkey", FEARGUARD_MAX_SPEED_MPS=2.0, FEARGUARD_TRACK=str(track)),
+               _tub_frames(shared_data, 1300, EYES_LOOPS + 10))
+        _drive(part(FEARGUARD_MAX_SPEED_MPS=2.0), _video_frames(shared_data / "road/video/solidWhiteRight.mp4", EYES_LOOPS + 10))
+    assert not [r for r in caplog.records if "lane was seen" in r.getMessage()]
+
+
+def _video_frames(path, count: int) -> list[np.ndarray]:
+    """A dash-cam video's frames at Donkey's 160x120, RGB (the lane model reads this road)."""
+    import cv2
+
+    cap, out = cv2.VideoCapture(str(path)), []
+    while len(out) < count:
+        ok, bgr = cap.read()
+        if not ok:
+            cap.set(cv2.CAP_PROP_POS_FRAMES, 0)  # loop the short clip
+            continue
+        out.append(cv2.cvtColor(cv2.resize(bgr, (160, 120), interpolation=cv2.INTER_AREA), cv2.COLOR_BGR2RGB))
+    cap.release()
+    return out

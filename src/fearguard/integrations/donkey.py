@@ -17,7 +17,9 @@ Conversions at the boundary, both ways, explicit (docs/donkey.md):
 Parts get no timestamp, so the part reads a monotonic clock (wall time can step back on a Pi without a
 real-time clock). Every output is a finite float or a string, so ``TubWriter`` can record it (it
 rejects NaN and inf). Until every wired sensor has delivered its first reading (a frame; a TFMini echo)
-the part holds the car still with ``fear/mode = "STARTING"`` rather than entering an emergency.
+the part holds the car still with ``fear/mode = "STARTING"`` rather than entering an emergency. A car without
+``FEARGUARD_TRACK`` whose camera hardly sees the lane over its first ``EYES_LOOPS`` loops (and so stands) logs once
+what would help (``replay/eyes.py``).
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ import numpy as np
 
 from fearguard.camera import CameraModel, camera_preset, load_camera
 from fearguard.readings import finite_reading
+from fearguard.replay.eyes import DONKEY, EyesCheck
 from fearguard.supervisor import Command, FearGuard, Observation
 from fearguard.vehicle import PRESETS, VehicleLimits
 
@@ -49,6 +52,7 @@ FEAR_OUTPUTS = ("fear/value", "fear/mode", "fear/limit_mps")
 FEAR_TYPES = ("float", "str", "float")  # TubWriter types of FEAR_OUTPUTS
 TFMINI_CHANNEL = "lidar/dist"  # donkeycar's TFMini part (cm)
 ODOM_CHANNEL = "enc/speed"  # donkeycar's odometry (m/s)
+EYES_LOOPS = 400  # [loops] supervised loops (20 s at Donkey's 20 Hz) after which the part says, once, if the lane was hardly seen
 
 
 def estimated_speed_mps(
@@ -119,6 +123,9 @@ class FearGuardPart:
         self.outputs = [*channels, *FEAR_OUTPUTS]
         self.types = ["float", "float", *FEAR_TYPES]  # for TubWriter: inputs += part.outputs; types += part.types
         self.last_command: Command | None = None
+        self._eyes: EyesCheck | None = EyesCheck(self.guard.rules.policy.recovery_min_confidence, camera=camera is not None,
+                                                 track=track is not None, remedies=DONKEY)
+        self._eyes_loops = 0
         self._reset_state()
 
     def _reset_state(self) -> None:
@@ -212,6 +219,7 @@ class FearGuardPart:
             speed_mps = self._speed_mps
         cmd = self.guard.step(Observation(t_s=t, speed_mps=speed_mps, frame=frame, ultrasonic_range_m=range_m, steering_deg=pilot_deg))
         self.last_command = cmd
+        self._watch_eyes(cmd)
         limit = finite_reading(cmd.speed_limit_mps)
         limit = 0.0 if limit is None else max(0.0, limit)
         if u is None:
@@ -226,6 +234,21 @@ class FearGuardPart:
         out_angle = deg_to_donkey(steering, limits.max_steering_deg) if steering is not None else 0.0
         fear = finite_reading(cmd.fear)
         return out_angle, out_throttle, 1.0 if fear is None else fear, cmd.mode.name, limit
+
+
+    def _watch_eyes(self, cmd: Command) -> None:
+        """Over the first EYES_LOOPS supervised loops, count how much of the lane the camera saw; then, once, a warning
+        naming what would help if it hardly saw it (replay/eyes.py: a car that stands because its camera finds no lane
+        on a track it cannot read says so, and how to teach it the track)."""
+        if self._eyes is None:
+            return
+        self._eyes.add(cmd)
+        self._eyes_loops += 1
+        if self._eyes_loops >= EYES_LOOPS:
+            advice = self._eyes.finish().advice
+            if advice:
+                logger.warning("fearguard: %s", advice)
+            self._eyes = None
 
 
 def _cfg_number(cfg: Any, key: str, default: float, meaning: str) -> float:

@@ -1,15 +1,17 @@
-"""Did the camera's lane model see this recording's road? A replay's advice when it hardly did.
+"""Did the camera's lane model see the road at all? Advice, in a replay and in the Donkey part, when it hardly did.
 
 A model car's camera replayed with no camera file and no learnt track usually reads lane confidence 0 on frame after
 frame (issue 33's table: clean frames calm on 0 % of most model-car sources) — the road region without a camera model
 is a dash-cam's (the road from 62 to 93 % of the picture's height, narrowing toward the middle) and a low, wide
-camera sees its track elsewhere — and the replay then says only "EMERGENCY 94 %". Over the whole replay this counts
-the frames on which the lane was seen at all (``lane_confidence`` at least the rule file's
-``recovery_min_confidence``, the confidence from which a creep steers by the lane seen now: one owner for "seen") and
-the frames the road picture held the car in EMERGENCY. When the lane was seen on fewer than ``SEEN_SHARE_MIN`` of the
-frames, the road caused most of the EMERGENCY, and no track profile was given, the summary's ``eyes_check`` carries
-advice naming what would help: a profile learnt from the user's own driving (``fearguard learn``, docs/learning.md) and
-the camera's pose (``--camera``). It changes nothing in the replay itself.
+camera sees its track elsewhere — and the replay then says only "EMERGENCY 94 %", the Donkey car only stands. Over a
+replay (or the Donkey part's first ``integrations.donkey.EYES_LOOPS`` supervised loops) this counts the frames on which
+the lane was seen at all (``lane_confidence`` at least the rule file's ``recovery_min_confidence``, the confidence from
+which a creep steers by the lane seen now: one owner for "seen") and the frames the road picture held the car in
+EMERGENCY. When the lane was seen on fewer than ``SEEN_SHARE_MIN`` of the
+frames, the road caused most of the EMERGENCY, and no track profile was given, the advice names what would help — a
+profile learnt from the user's own driving (``fearguard learn``, docs/learning.md) and, without a camera file, the
+camera's pose — in the words of where it is read (``Remedies``: the command line's options, or the Donkey config's
+keys). It changes nothing in what the supervisor does.
 """
 
 from __future__ import annotations
@@ -29,6 +31,19 @@ _BINS = 100  # lane confidences counted in hundredths (constant memory over any 
 
 
 @dataclass(frozen=True)
+class Remedies:
+    """How the user gives the supervisor a track profile and a camera, where the advice is read."""
+
+    track: str  # how a learnt profile is given, after `fearguard learn RECORDING --out track.npz`
+    camera: str  # how the camera's pose is given
+
+
+CLI = Remedies(track="then `--track track.npz`", camera="`--camera camera.toml`, `fearguard calibrate`")
+DONKEY = Remedies(track="then FEARGUARD_TRACK = \"track.npz\" in myconfig.py",
+                  camera="FEARGUARD_CAMERA: a camera preset's name or a camera.toml from `fearguard calibrate`")
+
+
+@dataclass(frozen=True)
 class EyesVerdict:
     """What the replay's camera saw of the lane; ``advice`` when it hardly saw it (None otherwise)."""
 
@@ -45,11 +60,11 @@ class EyesVerdict:
 
 
 class EyesCheck:
-    """Fed each frame's Command (``add``); ``finish`` gives the verdict. ``camera``/``track``: whether the replay had a
-    camera file and a track profile (the advice names what is missing)."""
+    """Fed each frame's Command (``add``); ``finish`` gives the verdict. ``camera``/``track``: whether the supervisor had
+    a camera model and a track profile (the advice names what is missing, in the words of ``remedies``)."""
 
-    def __init__(self, seen_threshold: float, camera: bool, track: bool) -> None:
-        self.seen_threshold, self._camera, self._track = seen_threshold, camera, track
+    def __init__(self, seen_threshold: float, camera: bool, track: bool, remedies: Remedies = CLI) -> None:
+        self.seen_threshold, self._camera, self._track, self._remedies = seen_threshold, camera, track, remedies
         self._counts = np.zeros(_BINS + 1, np.int64)  # lane confidence in hundredths
         self._supervised = 0
         self._road_emergency = 0
@@ -77,15 +92,15 @@ class EyesCheck:
         if seen < SEEN_SHARE_MIN and road >= ROAD_EMERGENCY_SHARE_MIN and not self._track:
             advice = (f"the lane was seen (lane confidence >= {self.seen_threshold:g}) on {100 * seen:.0f} % of frames "
                       f"(median {median:.2f}) and the road picture held the car in EMERGENCY on {100 * road:.0f} %: "
-                      + _what_helps(self._camera))
+                      + _what_helps(self._camera, self._remedies))
         return EyesVerdict(n, seen, median, road, self.seen_threshold, advice)
 
 
-def _what_helps(camera: bool) -> str:
-    learn = ("learn this track from a recording of normal driving (`fearguard learn RECORDING --out track.npz`, then "
-             "`--track track.npz`; docs/learning.md)")
+def _what_helps(camera: bool, remedies: Remedies) -> str:
+    learn = (f"learn this track from a recording of normal driving (`fearguard learn RECORDING --out track.npz`, "
+             f"{remedies.track}; docs/learning.md)")
     if camera:
         return f"this track's guidance is not what the camera's lane model looks for; {learn}"
-    return (f"without a camera file the lane model looks where a dash-cam sees the road ({100 * TOP_FRACTION:.0f}-"
+    return (f"without a camera model the lane model looks where a dash-cam sees the road ({100 * TOP_FRACTION:.0f}-"
             f"{100 * BOTTOM_FRACTION:.0f} % of the picture's height, narrowing toward the middle); {learn}, or give the camera's "
-            f"pose (`--camera camera.toml`, `fearguard calibrate`)")
+            f"pose ({remedies.camera})")
