@@ -43,6 +43,10 @@ def test_a_fleet_writes_a_folder_per_recording_and_the_table(recordings: list[st
     assert data["totals"]["recordings"] == 3 and data["totals"]["failed"] == 0
     table = (tmp_path / "replays.md").read_text()
     assert "| **3 recordings** |" in table and "road " in table and table in out
+    assert car["lane_seen_share"] < 0.2 and car["eyes_advice"] and rows["solidWhiteRight.mp4"]["eyes_advice"] is None
+    note = next(line for line in table.splitlines() if line.startswith("note: "))
+    assert "video01" in note and "solidWhiteRight" not in note and "fearguard learn" in note  # the model car's, not the road's
+    assert 0.0 <= data["totals"]["lane_seen_share"] <= 1.0
     summary = json.loads((tmp_path / "video01" / "summary.json").read_text())  # the row holds the summary's numbers
     assert {k: v for k, v in key_numbers(summary).items() if k != "processing_fps"} == \
            {k: v for k, v in car.items() if k in key_numbers(summary) and k != "processing_fps"}

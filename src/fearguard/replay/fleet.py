@@ -72,7 +72,9 @@ def run_row(spec: RunSpec, stop: StopSignal | None = None) -> dict[str, Any]:
 
 def key_numbers(summary: Mapping[str, Any], every: int = 1) -> dict[str, Any]:
     """A replay summary's numbers for the fleet table: frames, seconds replayed and in each mode, emergency episodes,
-    the causes of the EMERGENCY frames and of the frames with fear ≥ MEDIUM (seconds each), fear mean and max."""
+    the causes of the EMERGENCY frames and of the frames with fear ≥ MEDIUM (seconds each), fear mean and max, the share
+    of frames the lane was seen on and the replay's advice when it was hardly seen (replay/eyes.py)."""
+    eyes = summary.get("eyes_check") or {}
     frames = int(summary.get("processed_frames") or 0)
     frame_s = every / float(summary["fps"]) if summary.get("fps") else 0.0
     modes = summary.get("mode_share", {})
@@ -83,6 +85,7 @@ def key_numbers(summary: Mapping[str, Any], every: int = 1) -> dict[str, Any]:
         "emergency_causes": _causes_s([e["causes"] for e in episodes], frame_s),
         "elevated_causes": _causes_s([s["causes"] for s in summary.get("elevated_fear", [])], frame_s),
         "fear_mean": summary.get("fear_mean"), "fear_max": summary.get("fear_max"),
+        "lane_seen_share": eyes.get("lane_seen_share"), "eyes_advice": eyes.get("advice"),
         "processing_fps": summary.get("processing_fps"),  # timing: the machine's, not the recording's
     }
 
@@ -108,16 +111,25 @@ def merge(rows: Sequence[Mapping[str, Any]]) -> tuple[dict[str, Any], str]:
     totals = {"recordings": len(clean), "failed": len(clean) - len(good), "frames": sum(r["frames"] for r in good),
               "duration_s": sum(r["duration_s"] for r in good), "emergency_episodes": sum(r["emergency_episodes"] for r in good),
               "mode_s": {m: sum(r["mode_s"][m] for r in good) for m in MODE_ORDER}}
-    lines = ["| recording | frames | replayed s | " + " | ".join(f"{m} s" for m in MODE_ORDER) + " | emergency episodes | top causes |",
-             "|---|---|---|" + "---|" * len(MODE_ORDER) + "---|---|"]
+    seen = [(r["lane_seen_share"], r["frames"]) for r in good if r.get("lane_seen_share") is not None]
+    totals["lane_seen_share"] = sum(x * n for x, n in seen) / sum(n for _, n in seen) if seen and sum(n for _, n in seen) else None
+    lines = ["| recording | frames | replayed s | " + " | ".join(f"{m} s" for m in MODE_ORDER)
+             + " | emergency episodes | top causes | lane seen % |", "|---|---|---|" + "---|" * len(MODE_ORDER) + "---|---|---|"]
     for r in clean:
         if "error" in r:
-            lines.append(f"| {r['recording']} | – | – | " + "– | " * len(MODE_ORDER) + f"– | **{r['error']}** |")
+            lines.append(f"| {r['recording']} | – | – | " + "– | " * len(MODE_ORDER) + f"– | **{r['error']}** | – |")
             continue
         causes = ", ".join(f"{c} {s:.1f} s" for c, s in top_causes(r)) or "–"
+        seen = r.get("lane_seen_share")
         lines.append(f"| {r['recording']} | {r['frames']} | {r['duration_s']:.1f} | "
-                     + " | ".join(f"{r['mode_s'][m]:.1f}" for m in MODE_ORDER) + f" | {r['emergency_episodes']} | {causes} |")
+                     + " | ".join(f"{r['mode_s'][m]:.1f}" for m in MODE_ORDER) + f" | {r['emergency_episodes']} | {causes} | "
+                     + (f"{100 * seen:.0f} |" if seen is not None else "– |"))
     lines.append(f"| **{totals['recordings']} recordings** | {totals['frames']} | {totals['duration_s']:.1f} | "
                  + " | ".join(f"{totals['mode_s'][m]:.1f}" for m in MODE_ORDER) + f" | {totals['emergency_episodes']} | "
-                 + (f"{totals['failed']} could not be replayed |" if totals["failed"] else "– |"))
+                 + (f"{totals['failed']} could not be replayed |" if totals["failed"] else "– |")
+                 + (f" {100 * totals['lane_seen_share']:.0f} |" if totals["lane_seen_share"] is not None else " – |"))
+    hardly = [r for r in good if r.get("eyes_advice")]
+    if hardly:  # the camera hardly saw the lane: what would help, once for the fleet (each summary.json has its own)
+        others = f" (also {', '.join(r['recording'] for r in hardly[1:])})" if len(hardly) > 1 else ""
+        lines += ["", f"note: {hardly[0]['recording']}{others}: {hardly[0]['eyes_advice']}"]
     return {"recordings": clean, "totals": totals}, "\n".join(lines) + "\n"
