@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from fearguard.fear import Cause
+from fearguard.policy.config import Mode
 from fearguard.supervisor import Command
 from fearguard.vision.lanes import BOTTOM_FRACTION, TOP_FRACTION
 
@@ -45,7 +46,7 @@ DONKEY = Remedies(track="then FEARGUARD_TRACK = \"track.npz\" in myconfig.py",
 
 @dataclass(frozen=True)
 class EyesVerdict:
-    """What the replay's camera saw of the lane; ``advice`` when it hardly saw it (None otherwise)."""
+    """What the camera saw of the lane; ``advice`` when it hardly saw it (None otherwise)."""
 
     frames: int  # frames with a lane confidence
     lane_seen_share: float | None  # of those frames: lane confidence >= the seen threshold (None: no frame)
@@ -74,7 +75,7 @@ class EyesCheck:
         if command is None:
             return
         self._supervised += 1
-        if command.mode.name == "EMERGENCY" and command.cause is Cause.ROAD:
+        if command.mode is Mode.EMERGENCY and command.cause is Cause.ROAD:
             self._road_emergency += 1
         confidence = command.cues.lane_confidence
         if confidence == confidence:  # NaN (no picture) is no reading of the lane
