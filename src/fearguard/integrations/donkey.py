@@ -125,7 +125,6 @@ class FearGuardPart:
         self.last_command: Command | None = None
         self._eyes: EyesCheck | None = EyesCheck(self.guard.rules.policy.recovery_min_confidence, camera=camera is not None,
                                                  track=track is not None, remedies=DONKEY)
-        self._eyes_loops = 0
         self._reset_state()
 
     def _reset_state(self) -> None:
@@ -235,7 +234,6 @@ class FearGuardPart:
         fear = finite_reading(cmd.fear)
         return out_angle, out_throttle, 1.0 if fear is None else fear, cmd.mode.name, limit
 
-
     def _watch_eyes(self, cmd: Command) -> None:
         """Over the first EYES_LOOPS supervised loops, count how much of the lane the camera saw; then, once, a warning
         naming what would help if it hardly saw it (replay/eyes.py: a car that stands because its camera finds no lane
@@ -243,8 +241,7 @@ class FearGuardPart:
         if self._eyes is None:
             return
         self._eyes.add(cmd)
-        self._eyes_loops += 1
-        if self._eyes_loops >= EYES_LOOPS:
+        if self._eyes.supervised >= EYES_LOOPS:
             advice = self._eyes.finish().advice
             if advice:
                 logger.warning("fearguard: %s", advice)

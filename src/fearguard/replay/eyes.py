@@ -71,6 +71,11 @@ class EyesCheck:
         self._road_emergency = 0
         self._seen = 0
 
+    @property
+    def supervised(self) -> int:
+        """Commands counted so far (frames the supervisor answered)."""
+        return self._supervised
+
     def add(self, command: Command | None) -> None:
         if command is None:
             return

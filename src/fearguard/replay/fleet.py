@@ -111,8 +111,9 @@ def merge(rows: Sequence[Mapping[str, Any]]) -> tuple[dict[str, Any], str]:
     totals = {"recordings": len(clean), "failed": len(clean) - len(good), "frames": sum(r["frames"] for r in good),
               "duration_s": sum(r["duration_s"] for r in good), "emergency_episodes": sum(r["emergency_episodes"] for r in good),
               "mode_s": {m: sum(r["mode_s"][m] for r in good) for m in MODE_ORDER}}
-    seen = [(r["lane_seen_share"], r["frames"]) for r in good if r.get("lane_seen_share") is not None]
-    totals["lane_seen_share"] = sum(x * n for x, n in seen) / sum(n for _, n in seen) if seen and sum(n for _, n in seen) else None
+    read = [(r["lane_seen_share"], r["frames"]) for r in good if r.get("lane_seen_share") is not None]
+    read_frames = sum(n for _, n in read)
+    totals["lane_seen_share"] = sum(x * n for x, n in read) / read_frames if read_frames else None
     lines = ["| recording | frames | replayed s | " + " | ".join(f"{m} s" for m in MODE_ORDER)
              + " | emergency episodes | top causes | lane seen % |", "|---|---|---|" + "---|" * len(MODE_ORDER) + "---|---|---|"]
     for r in clean:
