@@ -414,7 +414,8 @@ class FearGuard:
         plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t,
                               route_cap if routed else None)
         status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=not (seen or routed))
-        lane_now = perceived.lane_steering_deg if perceived is not None and seen else None
+        # a route is the known way across a junction, where the lane seen now may be the crossing road's
+        lane_now = perceived.lane_steering_deg if perceived is not None and seen and not routed else None
         estimator = route_deg if routed else None if st.estimator_distrusted else steering
         bound = v.max_steering_deg if routed else cfg.recovery_creep_max_deg  # a route is a known path, not a guess
         return emergency_step(plan, creep, lane_now, wanted, status, estimator, bound)

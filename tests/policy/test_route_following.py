@@ -100,14 +100,26 @@ def test_a_route_that_is_no_number_is_said_once_and_no_route_is_followed(route: 
 
 
 @pytest.mark.parametrize("rules_file", ["default.toml", "duckiebot.toml"])
-def test_rule_files_with_route_blind_m_zero_never_follow_a_route(rules_file: str) -> None:
+def test_a_rule_file_with_route_blind_m_zero_never_follows_a_route(rules_file: str) -> None:
     rules = fg.load_rules(bundled_rules_path(rules_file))
-    assert rules.policy.route_blind_m == 0.0
+    rules = dataclasses.replace(rules, policy=dataclasses.replace(rules.policy, route_blind_m=0.0))
     car = fg.VehicleLimits.preset("duckiebot" if rules_file == "duckiebot.toml" else "donkey")
     speed = 0.5 * car.max_speed_mps
     with_route, without = _drive(5.0, LOST, speed, 3.0, rules, car), _drive(None, LOST, speed, 3.0, rules, car)
     answer = [(c.mode, c.speed_limit_mps, c.steering_deg) for c in without]
     assert [(c.mode, c.speed_limit_mps, c.steering_deg) for c in with_route] == answer
+
+
+def test_the_bundled_duckiebot_follows_its_route_across_a_junction_and_default_follows_none() -> None:
+    """A Duckiebot's intersection navigation gives the way through a junction (worlds/duckietown): its rule file follows
+    it for a junction's crossing; the default rule file (no world gives that car a route) follows none."""
+    assert fg.load_rules(bundled_rules_path("default.toml")).policy.route_blind_m == 0.0
+    rules = fg.load_rules(bundled_rules_path("duckiebot.toml"))
+    assert 0.6 <= rules.policy.route_blind_m <= 3.0  # a junction tile (0.585 m) and its approach and exit, not a drive
+    car = dataclasses.replace(fg.VehicleLimits.preset("duckiebot"), has_ultrasonic=True, ultrasonic_max_range_m=1.2)  # path known clear
+    cmds = _drive(5.0, LOST, 0.15, 3.0, rules, car)[round(2.0 / DT):]
+    assert any("following the route" in r for c in cmds[:5] for r in c.reasons)
+    assert all(c.mode is not fg.Mode.EMERGENCY for c in cmds[:5])
 
 
 # -- the pure step ------------------------------------------------------------------------------------------------

@@ -49,13 +49,15 @@ def test_the_corridor_is_the_arc_as_wide_as_the_path_and_no_farther_than_its_rea
     assert checked > 0 or near is None or near > reach or abs(curvature) * near >= 1.0
 
 
-def _frame(cam: CameraModel, rng: np.random.Generator, colour: tuple[int, int, int], at_m: float, lines: bool) -> np.ndarray:
-    """A plain grey road under a sky, a box standing straight ahead ``at_m`` from the camera; with ``lines`` a 3.5 m lane."""
+def _frame(cam: CameraModel, rng: np.random.Generator, colour: tuple[int, int, int], at_m: float,
+           lines: bool | tuple[float, ...]) -> np.ndarray:
+    """A plain grey road under a sky, a box standing straight ahead ``at_m`` from the camera; with ``lines`` a 3.5 m lane
+    (or the lines at these lateral offsets)."""
     img = np.full((H, W, 3), (110, 112, 108), np.uint8)
     img[: int(cam.horizon_v_px()), :] = (230, 200, 170)
     img = np.clip(img.astype(int) + rng.integers(-6, 7, img.shape), 0, 255).astype(np.uint8)
     if lines:
-        for y in (1.75, -1.75):
+        for y in (1.75, -1.75) if lines is True else lines:
             u, v, _ = cam.project_ground(np.array([3.0, 40.0]), np.array([y, y]))
             cv2.line(img, (int(u[0]), int(v[0])), (int(u[1]), int(v[1])), (235, 235, 235), 3)
     near, far = cam.ground_row_px(at_m), cam.ground_row_px(at_m + 1.0)
@@ -63,7 +65,8 @@ def _frame(cam: CameraModel, rng: np.random.Generator, colour: tuple[int, int, i
     return img
 
 
-def _search(cam: CameraModel, path: RoutePath | None, colour: tuple[int, int, int], at_m: float, lines: bool, seed: int):
+def _search(cam: CameraModel, path: RoutePath | None, colour: tuple[int, int, int], at_m: float, lines: bool | tuple[float, ...],
+            seed: int):
     rng = np.random.default_rng(seed)
     pipeline = FramePipeline(cam, fps=10)
     for i in range(8):
@@ -110,3 +113,19 @@ def test_a_lane_seen_is_searched_whatever_the_route(colour: tuple[int, int, int]
     turning = _search(cam, RoutePath(math.tan(math.radians(-25.0)) / 7.0, 1.85), colour, 0.75 * _aim_m(cam), True, 1)
     assert turning.left is not None and turning.right is not None
     assert turning.obstacle is not None
+
+
+@pytest.mark.parametrize("colour", COLOURS[:3])
+@pytest.mark.parametrize("side", [1.75, -1.75])
+def test_a_lane_seen_on_one_side_is_searched_only_where_the_route_takes_the_car(colour: tuple[int, int, int], side: float) -> None:
+    """Its other side is a guess (the seen one a lane width over): at a Duckietown junction that guess took in the
+    crossing road's stop line beside the robot's way, read as an object 0.13 m ahead. With a route, an object in the
+    guessed lane but off the route's path is none; one on the path still is; without a route the lane is searched."""
+    cam = CameraModel.default(W, H, mount_height_m=1.5)
+    at, seed = 0.75 * _aim_m(cam), COLOURS.index(colour)
+    alone = _search(cam, None, colour, at, (side,), seed)
+    assert (alone.left is None) != (alone.right is None)  # one side seen
+    assert alone.obstacle is not None
+    away = -35.0 if side > 0 else 35.0  # turning into the guessed side, away from the box straight ahead
+    assert _search(cam, RoutePath(math.tan(math.radians(away)) / 7.0, 1.85), colour, at, (side,), seed).obstacle is None
+    assert _search(cam, RoutePath(0.0, 1.85), colour, at, (side,), seed).obstacle is not None

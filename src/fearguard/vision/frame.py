@@ -346,16 +346,23 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     obstacle, searched_m, stop_line_m = None, 0.0, None
     # a range needs the mounting height (without it the search is skipped). The bending lane model searches its own
     # interior, round the curve (the straight chords between its boundaries cut across the verge there), and on the
-    # tiled floors it serves a smoother tile is no object
-    if p.camera.mount_height_m is not None and (lanes.ground is None or lanes.interior is not None):
+    # tiled floors it serves a smoother tile is no object; with no lane to search (no boundary seen; the bending model with
+    # no interior: a boundary whose offset by a lane width it cannot place), the route's path (a junction's crossing)
+    routed = path is not None and lanes.interior is None and (lanes.ground is not None or (lanes.left is None and lanes.right is None))
+    # a lane seen on one side only is a guess on the other (the seen one a lane width over: at a junction it takes in the
+    # crossing road's stop line beside the car's way): with a route, it is searched only where the route takes the car
+    one_side = not routed and path is not None and (lanes.left is None) != (lanes.right is None)
+    if p.camera.mount_height_m is not None and (lanes.ground is None or lanes.interior is not None or routed):
         searched_m = search_depth_m(p.camera, p.region, p.scale)
         bounds = None
-        if path is not None and lanes.left is None and lanes.right is None and lanes.interior is None:
+        if path is not None:
             aim_v = lanes.aim_row_px * p.scale  # the route's steering aims at this row's ground: beyond it its arc is a guess
             bounds = path.bounds_px(p.camera, p.region, p.scale, p.camera.ground_range_m(aim_v) or 0.0)
-            searched_m = min(searched_m, p.camera.range_ahead_m(aim_v) or 0.0)
+            if routed:
+                searched_m = min(searched_m, p.camera.range_ahead_m(aim_v) or 0.0)
         found_in_lane = search_lane(surface, road, p.region, expected_l, expected_r, p.camera, p.scale, interior=lanes.interior,
-                                    smooth_objects=lanes.ground is None, edge_paint=lanes.white, bounds=bounds)
+                                    smooth_objects=lanes.ground is None, edge_paint=lanes.white,
+                                    bounds=bounds if routed else None, within=bounds if one_side else None)
         obstacle, stop_line_m = found_in_lane.obstacle, found_in_lane.stop_line_m
     obstacle = trackers.obstacles.update(obstacle)
     lead = lead_from_box(box, p.camera) if box is not None else None

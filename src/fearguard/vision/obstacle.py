@@ -17,6 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
@@ -56,6 +57,10 @@ BAND_COVER = 0.8  # [-] of the interior width: a band of foreign rows this full 
 BAND_ROWS_FULL = 0.8  # [-] ... (this share of its rows) ...
 BAND_DEPTH = 1.0  # [-] ... and no deeper on the ground than this × the interior's width there is paint across the lane (a stop
 #   line, a crossing's edge), not an object: anything standing projects far deeper onto the ground plane than it is wide
+STRIP_THIN = 0.35  # [-] a stretch whose foreign patch lies on the ground as a strip no thicker than this × its length ...
+STRIP_ACROSS_DEG = 45.0  # [deg] ... running across the way (within this of square to the heading; anything standing
+#   projects along the rays from the camera, which run ahead) and as long as BAND_COVER of the interior is a line seen
+#   askew: each row of it covers only part of the width (robotarium2: a red stop line crossed at 15 deg)
 
 
 PATH_CAR_WIDTHS = 1.25  # [-] a route's path is searched this many car widths wide (after the INSET): its swept path with an
@@ -158,14 +163,17 @@ def detect_obstacle(
 def search_lane(
     maps: SurfaceMaps, road: RoadAppearance, region: RoadRegion, left: LaneLine, right: LaneLine, camera: CameraModel,
     scale: float, *, interior: np.ndarray | None = None, smooth_objects: bool = True, edge_paint: np.ndarray | None = None,
-    bounds: tuple[np.ndarray, np.ndarray] | None = None,
+    bounds: tuple[np.ndarray, np.ndarray] | None = None, within: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> LaneSearch:
     """The nearest object in the ego lane of a working image, and the nearest stop line (a painted band across it).
 
     The interior lies between the straight boundaries, inset by INSET of the lane width — or between ``bounds`` (each
     road row's left and right column, NaN: nothing searched there: ``RoutePath.bounds_px``) — or, when the lane model
-    bends, is given: ``interior``, bool over the road rows (``ground_lanes.lane_interior``). ``smooth_objects``: see
-    ``foreign_mask``."""
+    bends, is given: ``interior``, bool over the road rows (``ground_lanes.lane_interior``). ``within``: the route's path
+    (as ``bounds``): the lane is searched only where the route takes the car too (rows where the path is NaN, beyond its
+    aim point, are searched across the lane) — the caller gives it for a lane seen on one side only, whose other side is
+    a guess: at a junction the interior extended from one boundary takes in the crossing road's stop line, paint beside
+    the car's way. ``smooth_objects``: see ``foreign_mask``."""
     line_m: float | None = None
     rows = np.arange(region.top_v_px, region.bottom_v_px + 1)
     if interior is None:
@@ -174,11 +182,14 @@ def search_lane(
         else:
             a, b = np.nan_to_num(bounds[0], nan=0.0), np.nan_to_num(bounds[1], nan=0.0)
         c0, c1, inside, width = _inset_interior(a, b, region.width_px)
+        if within is not None:
+            inside = inside & _path_mask(within, region.width_px)[:, c0:c1]
+            width = inside.sum(axis=1)
         foreign = foreign_mask(maps, road, slice(c0, c1), smooth_objects=smooth_objects) & inside
     else:
         spans = np.flatnonzero(interior.any(axis=0))
         c0, c1 = (int(spans[0]), int(spans[-1]) + 1) if len(spans) else (0, 0)  # only the columns the interior covers
-        inside = interior[:, c0:c1]
+        inside = interior[:, c0:c1] if within is None else interior[:, c0:c1] & _path_mask(within, region.width_px)[:, c0:c1]
         width = inside.sum(axis=1)
         every = foreign_mask(maps, road, smooth_objects=smooth_objects)  # the whole width: the edge test looks beyond it
         foreign = every[:, c0:c1] & inside
@@ -188,10 +199,17 @@ def search_lane(
         bottom = _lowest_stretch_end(hit, MIN_ROWS)
         for _ in range(EDGE_PASSES):  # painted bands across the lane are skipped: the search goes on beyond them
             band_top = None if bottom is None else _painted_band(hit, count, width, bottom, rows, camera, scale)
+            askew = band_top is None and bottom is not None
+            if askew:  # paint seen askew (no row full) is skipped too
+                band_top = _painted_strip(foreign, hit, width, bottom, rows, c0, camera, scale)
             if band_top is None or bottom is None:
                 break
-            band = maps.grey[band_top : bottom + 1, c0:c1][foreign[band_top : bottom + 1]]
-            if line_m is None and band.size and float(band.mean()) > road.grey:  # paint is brighter than the road; a shadow is not
+            on_band = foreign[band_top : bottom + 1]
+            band = maps.grey[band_top : bottom + 1, c0:c1][on_band]
+            # paint is brighter than the road (a shadow is not); seen askew only a red line is a stop line: a curve's
+            # white outer tape runs across the view at its entry
+            line = not askew or _red_share(maps, band_top, bottom, c0, c1, on_band) >= 0.5
+            if line_m is None and line and band.size and float(band.mean()) > road.grey:
                 line_m = camera.range_ahead_m((rows[bottom] + 1.0) * scale)
             hit[band_top : bottom + 1] = False
             bottom = _lowest_stretch_end(hit, MIN_ROWS)
@@ -283,16 +301,71 @@ def _edge_runs(
 def _painted_band(hit: np.ndarray, count: np.ndarray, width: np.ndarray, bottom: int, rows: np.ndarray, camera: CameraModel,
                   scale: float) -> int | None:
     """The first row of the stretch of object rows ending at ``bottom`` when it is paint lying across the lane (a stop line):
-    it fills the interior's width and is shallow on the ground plane. None when it may stand (or without a mounting height)."""
+    it fills the interior's width and is shallow on the ground plane. None when it may stand (or without a mounting height).
+    Its first and last rows are where its edges cross the pixel rows — on a line seen a few degrees askew they cover only
+    part of the width (TTIC_ripltown: a red line 0.14 m ahead, 6 of its 8 rows full) — so with three rows or more only
+    the rows between them are judged full or not."""
     top = bottom
     while top > 0 and hit[top - 1]:
         top -= 1
     full = count[top : bottom + 1] >= BAND_COVER * np.maximum(width[top : bottom + 1], 1)
+    full = full[1:-1] if len(full) >= 3 else full
     near, far = camera.ground_range_m((rows[bottom] + 1.0) * scale), camera.ground_range_m(rows[top] * scale)
     if near is None or far is None or not (math.isfinite(near) and math.isfinite(far)) or full.mean() < BAND_ROWS_FULL:
         return None
     interior_m = float(width[bottom]) * scale * near / camera.fx_px  # flat-ground width of the interior at the band
     return top if far - near <= BAND_DEPTH * interior_m else None
+
+
+RED_HUES = (10, 170)  # [OpenCV hue 0..180] at most the first or at least the second: red (Duckietown's stop lines)
+
+
+def _red_share(maps: SurfaceMaps, top: int, bottom: int, c0: int, c1: int, on: np.ndarray) -> float:
+    """Share of the band's pixels (``on``: bool over rows top..bottom, columns c0..c1) that are coloured red."""
+    hue = maps.hue[top : bottom + 1, c0:c1][on]
+    sat = maps.saturation[top : bottom + 1, c0:c1][on]
+    red = ((hue <= RED_HUES[0]) | (hue >= RED_HUES[1])) & (sat >= COLOUR_SAT_MIN)
+    return float(red.mean()) if red.size else 0.0
+
+
+def _painted_strip(foreign: np.ndarray, hit: np.ndarray, width: np.ndarray, bottom: int, rows: np.ndarray, c0: int,
+                   camera: CameraModel, scale: float) -> int | None:
+    """The first row of the patch ending the stretch of object rows at ``bottom`` (the largest connected foreign patch on
+    its lowest row; ``foreign``: bool over the road rows and the searched columns from ``c0``) when it lies on the
+    ground as a thin strip across the way: paint seen askew, which ``_painted_band`` misses because no row is full.
+    None when it may stand (or without a mounting height)."""
+    top = bottom
+    while top > 0 and hit[top - 1]:
+        top -= 1
+    h = camera.mount_height_m
+    if h is None or bottom - top + 1 < MIN_ROWS:
+        return None
+    patch = foreign[top : bottom + 1].astype(np.uint8)
+    n, labels = cv2.connectedComponents(patch, connectivity=8)
+    if n < 2:
+        return None
+    on_bottom = labels[-1][labels[-1] > 0]
+    if on_bottom.size == 0:
+        return None
+    ii, uu = np.nonzero(labels == np.bincount(on_bottom).argmax())
+    v = (rows[top + ii] + 0.5) * scale
+    pitch = math.radians(camera.pitch_deg)
+    angle = pitch + np.arctan2(v - camera.cy_px, camera.fy_px)
+    if np.any(angle <= 1e-6):
+        return None
+    x = h / np.tan(angle)
+    y = -((c0 + uu + 0.5) * scale - camera.cx_px) * (x * math.cos(pitch) + h * math.sin(pitch)) / camera.fx_px
+    pts = np.column_stack([x, y])
+    centred = pts - pts.mean(axis=0)
+    _, _, axes = np.linalg.svd(centred, full_matrices=False)
+    along, across = centred @ axes[0], centred @ axes[1]
+    length = float(np.percentile(along, 98) - np.percentile(along, 2))
+    thick = float(np.percentile(across, 98) - np.percentile(across, 2))
+    m_per_px = (float(np.median(x)) * math.cos(pitch) + h * math.sin(pitch)) * scale / camera.fx_px
+    lane_m = float(np.median(width[top : bottom + 1])) * m_per_px
+    square = abs(float(axes[0][0])) <= math.sin(math.radians(STRIP_ACROSS_DEG))  # the strip's direction vs the heading (x)
+    # its own first row, not the stretch's: an object standing beyond the line (another patch) keeps its rows
+    return top + int(ii.min()) if square and thick <= STRIP_THIN * length and length >= BAND_COVER * lane_m else None
 
 
 def lane_hidden_beyond(
@@ -343,6 +416,18 @@ def _inset_interior(a: np.ndarray, b: np.ndarray, width_px: int) -> tuple[int, i
     c0, c1 = int(lo.min()), int(max(hi.max(), lo.min()))  # only the columns some row's interior covers are judged
     cols = np.arange(c0, c1)[None, :]
     return c0, c1, (cols >= lo[:, None]) & (cols < hi[:, None]), np.maximum(hi - lo, 0)
+
+
+def _path_mask(bounds: tuple[np.ndarray, np.ndarray], width_px: int) -> np.ndarray:
+    """bool (road rows, width_px): inside the route's path (its bounds inset as a lane's); every column on rows where
+    the path is not known (NaN)."""
+    a, b = bounds
+    known = np.isfinite(a) & np.isfinite(b)
+    c0, c1, inside, _ = _inset_interior(np.where(known, a, 0.0), np.where(known, b, 0.0), width_px)
+    out = np.zeros((len(a), width_px), bool)
+    out[:, c0:c1] = inside
+    out[~known] = True
+    return out
 
 
 def _lowest_stretch_end(hit: np.ndarray, min_rows: int) -> int | None:

@@ -32,6 +32,7 @@ from fearguard.outputs.recorder import Recorder
 from fearguard.outputs.report import json_value
 from fearguard.supervisor import Command, FearGuard, Observation
 from fearguard.vision.lane_steering import HoughLaneSteering
+from fearguard.vision.navigated import NavigatedSteering
 from fearguard.worlds.duckietown.metrics import STOPPED_SPEED_MPS, Sample, route_completion, summarize_drive
 from fearguard.worlds.duckietown.preset import (
     FRAME_RATE_HZ,
@@ -71,6 +72,7 @@ class DriveOptions:
     video: bool = False
     plots: bool = True
     mcap: bool = False  # run.mcap for Foxglove (outputs/mcap.py)
+    route: bool = True  # the intersection navigation's route through junctions (world.route_bearing_deg), as MetaDrive's
 
     def __post_init__(self) -> None:
         if self.controller not in CONTROLLERS:
@@ -109,6 +111,7 @@ class DuckietownDrive:
         self.sim_ms: list[float] = []
         self._k = 0
         self._standing_since: float | None = None
+        self.route_now: float | None = None  # the route's steering at the last ``sense`` (the estimator's route, as MetaDrive's)
 
     def sense(self) -> Sensed | None:
         if self._k >= self.total:
@@ -116,7 +119,9 @@ class DuckietownDrive:
         o = self.o
         frame = self.world.frame_bgr() if o.controller != "expert" else None
         tof = self.world.tof_range_m() if o.range_sensor == "tof" else None
-        obs = Observation(t_s=self.truth.t_s, speed_mps=self.truth.speed_mps, frame=frame, ultrasonic_range_m=tof)
+        self.route_now = self.world.route_bearing_deg(self.aim_m) if o.route and o.controller != "expert" else None
+        obs = Observation(t_s=self.truth.t_s, speed_mps=self.truth.speed_mps, frame=frame, ultrasonic_range_m=tof,
+                          route_steering_deg=self.route_now)
         return Sensed(self._k, self.truth.t_s, obs, frame)
 
     def act(self, sensed: Sensed, decision: Decision) -> Outcome:
@@ -181,12 +186,13 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     camera = duckiebot_camera(o.width_px, o.height_px)
     lane = duckietown_lane()
     limits = duckiebot_limits(time_of_flight=o.range_sensor == "tof")
-    lanes = HoughLaneSteering(camera=camera, fps=FRAME_RATE_HZ, ground=lane)
+    camera_lanes = HoughLaneSteering(camera=camera, fps=FRAME_RATE_HZ, ground=lane)
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
-    guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=camera) if o.controller == "guarded" else None
     route = world.route_m()
     obstacle_xz = world.add_obstacle(o.obstacle, o.ahead_m) if o.obstacle is not None else None
     drive_world = DuckietownDrive(o, world, lane.aim_m)
+    lanes = NavigatedSteering(camera_lanes, lambda: drive_world.route_now, limits.max_steering_deg) if o.route else camera_lanes
+    guard = FearGuard(lanes, rules=rules, vehicle=limits, camera=camera) if o.controller == "guarded" else None
     controller: Controller
     if guard is not None:
         controller = Guarded(guard, o.cruise_mps)

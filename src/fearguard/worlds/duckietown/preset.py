@@ -81,6 +81,7 @@ def duckiebot_limits(*, time_of_flight: bool = False) -> VehicleLimits:
     return VehicleLimits(
         max_speed_mps=0.5, max_decel_mps2=0.5, reaction_time_s=ACTUATION_DELAY_S + SPEED_TIME_CONSTANT_S, stop_margin_m=0.05,
         max_steering_deg=MAX_BEARING_DEG, has_ultrasonic=time_of_flight, has_qr_localisation=False,
+        width_m=2 * WHEEL_OUTER_HALF_TRACK_M,  # its own 13 cm: a route's path is searched for objects (and paint) this wide
         ultrasonic_min_range_m=TOF_MIN_RANGE_M, ultrasonic_max_range_m=TOF_MAX_RANGE_M,
     )
 

@@ -46,6 +46,9 @@ OBSTACLE_HEIGHT_M = {"duck": 0.06, "cone": 0.08, "duckiebot": 0.12}  # [m] as th
 OBSTACLE_MESH = {"duck": "duckie", "cone": "cone", "duckiebot": "duckiebot"}  # our names → the simulator's kinds
 TOF_RAYS = 11  # [-] rays across the time-of-flight cone
 ROUTE_LIMIT_M = 60.0  # [m] the longest route measured (a lap of the largest bundled loops is ~30 m)
+JUNCTION_KINDS = ("3way", "4way")  # the simulator's intersection tiles (kind prefixes)
+JUNCTION_AHEAD_M = 0.3  # [m] the route is known from this far before a junction tile: the stop line and the approach
+#   where the lane model loses the lane (a Duckiebot at a stop line knows the junction from its AprilTag sign)
 
 
 @dataclass(frozen=True)
@@ -347,6 +350,31 @@ class DuckietownWorld:
         x, y = c * dx + s * dy, -s * dx + c * dy  # ahead, left
         dist2 = x * x + y * y
         return 0.0 if dist2 < 1e-9 else 2.0 * y / dist2
+
+    def route_bearing_deg(self, aim_m: float) -> float | None:
+        """The route's steering through a junction: the bearing (deg, + left) from the camera of the lane-centre point
+        ``aim_m`` further along the simulator's curve — the way the expert goes — while the robot is on a junction tile
+        or ``JUNCTION_AHEAD_M`` before one; None elsewhere (between junctions the robot has its lane to follow).
+
+        It stands in for a Duckiebot's intersection navigation: at the stop line the AprilTag sign says which junction
+        this is, and the chosen turn is driven from the map (the Duckietown stack's open-loop or tag-localised turn)."""
+        env = self.env
+        point, tangent = env.closest_curve_point(env.cur_pos, env.cur_angle)
+        if point is None:
+            return None
+        ahead = self.walk(point, tangent, JUNCTION_AHEAD_M)
+        if not (self._on_junction(env.cur_pos) or (ahead is not None and self._on_junction(ahead[0]))):
+            return None
+        found = self.walk(point, tangent, aim_m)
+        target = found[0] if found is not None else point
+        dx, dy = float(target[0] - env.cur_pos[0]), -float(target[2] - env.cur_pos[2])
+        c, s = math.cos(env.cur_angle), math.sin(env.cur_angle)
+        x, y = c * dx + s * dy, -s * dx + c * dy  # ahead of the axle, left
+        return math.degrees(math.atan2(y, x - CAMERA_AHEAD_M))
+
+    def _on_junction(self, pos: np.ndarray) -> bool:
+        tile = self.env._get_tile(*self.env.get_grid_coords(pos))
+        return tile is not None and str(tile["kind"]).startswith(JUNCTION_KINDS)
 
     def close(self) -> None:
         with contextlib.suppress(Exception):  # closing a headless GL context can fail harmlessly at exit

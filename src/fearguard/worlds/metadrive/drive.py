@@ -33,9 +33,9 @@ from fearguard.outputs.report import json_value
 from fearguard.perception import FrameSteering
 from fearguard.supervisor import FearGuard
 from fearguard.vision.lane_steering import HoughLaneSteering
+from fearguard.vision.navigated import NavigatedSteering
 from fearguard.worlds.metadrive.metrics import stopped_car_outcome, summarize_drive, supervisor_times
 from fearguard.worlds.metadrive.preset import AIM_M, CAR_LENGTH_M, CRUISE_MPS, STEP_S, metadrive_limits
-from fearguard.worlds.metadrive.steering import NavigatedSteering
 from fearguard.worlds.metadrive.world import DEFAULT_MAP, MetaDriveWorld, Scenario, require_positive
 
 CONTROLLERS = ("guarded", "unguarded", "expert")

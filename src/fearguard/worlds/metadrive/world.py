@@ -216,7 +216,7 @@ class MetaDriveWorld:
         if s.render:
             self._image = self._render()  # the first frame with the light, the shadows off and the lead
         self._expert: Any = None
-        self.route_now: float | None = None  # the route's steering at the last ``sense`` (worlds/metadrive/steering.py reads it)
+        self.route_now: float | None = None  # the route's steering at the last ``sense`` (vision/navigated.py reads it)
         self.start: Truth = self.truth()
         self.samples: list[Sample] = []
         self.sim_ms: list[float] = []

@@ -1,11 +1,12 @@
-"""The steering function MetaDrive's car is driven by: the lane seen by the camera, and the route where it leaves it.
+"""A steering function for a car with a route: the lane seen by the camera, and the route where it leaves it.
 
 A lane follower alone cannot take a roundabout's exit or a turn whose lane is painted: the lane it sees goes round
-(MetaDrive ``--map SOS --seed 4``: the car circled the roundabout, its progress stalled at 60 % of the expert's).
-MetaDrive's agents get its navigation (the route's lanes ahead); so does this stack: where the route's steering and
-the lane's disagree by more than ``FORK_DEG`` — the route leaves the lane seen, or no lane is seen — it steers by the
-route, else by the lane. The supervisor wraps it like any estimator (its lane check lets a departure the route asks
-for through: ``policy.lane_check``).
+(MetaDrive ``--map SOS --seed 4``: the car circled the roundabout, its progress stalled at 60 % of the expert's), and
+at a junction it reads the crossing road's lane. MetaDrive's agents get its navigation (the route's lanes ahead), a
+Duckiebot its intersection navigation; so does this stack: where the route's steering and the lane's disagree by more
+than ``FORK_DEG`` — the route leaves the lane seen, or no lane is seen — it steers by the route, else by the lane. The
+supervisor wraps it like any estimator (its lane check lets a departure the route asks for through:
+``policy.lane_check``). Both worlds with a route use it (``worlds/metadrive``, ``worlds/duckietown``).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""MetaDrive's steering stack (worlds/metadrive/steering.py): the lane seen, and the route where the route leaves it."""
+"""The route-following steering stack (vision/navigated.py): the lane seen, and the route where the route leaves it."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from fearguard.camera import CameraModel
 from fearguard.vision.lane_steering import HoughLaneSteering
-from fearguard.worlds.metadrive.steering import FORK_DEG, NavigatedSteering
+from fearguard.vision.navigated import FORK_DEG, NavigatedSteering
 
 CAM = CameraModel.default(320, 240, mount_height_m=2.1)
 ANALYSIS = HoughLaneSteering(CAM).pipeline.process(np.full((240, 320, 3), 110, np.uint8), 0.0)
