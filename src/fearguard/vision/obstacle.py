@@ -251,8 +251,6 @@ def _edge_runs(
     while top > 0 and hit[top - 1]:
         top -= 1
     width_px = interior.shape[1]
-    pitch = math.radians(camera.pitch_deg)
-    height = camera.mount_height_m if camera.mount_height_m is not None else 1.0
     spilled: dict[bool, list[int]] = {True: [], False: []}  # rows spilling at the left edge / at the right edge
     judged = 0  # rows not covered from edge to edge (those say nothing about a side)
     runs: dict[tuple[int, bool], tuple[int, int]] = {}  # (row, left?) -> the edge run's columns [lo, hi)
@@ -276,7 +274,7 @@ def _edge_runs(
         runs[(i, left_side)] = (a0, a0 + n) if left_side else (a1 + 1 - n, a1 + 1)
         if not (at_left or at_right):
             continue  # it runs out of the picture there: the edge's continuation, if any, is not seen
-        m_per_px = (x * math.cos(pitch) + height * math.sin(pitch)) * scale / camera.fx_px  # lateral ground per px there
+        m_per_px = _lateral_m_per_px(camera, x, scale)  # lateral ground per px there
         reach = max(1, math.ceil(SPILL_M / m_per_px))
         lo, hi = (a0 - reach, a0) if left_side else (a1 + 1, a1 + 1 + reach)
         if lo < 0 or hi > width_px:
@@ -320,6 +318,14 @@ def _painted_band(hit: np.ndarray, count: np.ndarray, width: np.ndarray, bottom:
 RED_HUES = (10, 170)  # [OpenCV hue 0..180] at most the first or at least the second: red (Duckietown's stop lines)
 
 
+def _lateral_m_per_px(camera: CameraModel, x_m: float | np.ndarray, scale: float) -> float | np.ndarray:
+    """Metres of flat ground across the view per working-image pixel at ground range ``x_m`` (``scale``: frame px per
+    working px); a mounting height is assumed known (1 m without one, as the callers' guards make moot)."""
+    pitch = math.radians(camera.pitch_deg)
+    height = camera.mount_height_m if camera.mount_height_m is not None else 1.0
+    return (x_m * math.cos(pitch) + height * math.sin(pitch)) * scale / camera.fx_px
+
+
 def _red_share(maps: SurfaceMaps, top: int, bottom: int, c0: int, c1: int, on: np.ndarray) -> float:
     """Share of the band's pixels (``on``: bool over rows top..bottom, columns c0..c1) that are coloured red."""
     hue = maps.hue[top : bottom + 1, c0:c1][on]
@@ -337,8 +343,7 @@ def _painted_strip(foreign: np.ndarray, hit: np.ndarray, width: np.ndarray, bott
     top = bottom
     while top > 0 and hit[top - 1]:
         top -= 1
-    h = camera.mount_height_m
-    if h is None or bottom - top + 1 < MIN_ROWS:
+    if camera.mount_height_m is None or bottom - top + 1 < MIN_ROWS:
         return None
     patch = foreign[top : bottom + 1].astype(np.uint8)
     n, labels = cv2.connectedComponents(patch, connectivity=8)
@@ -348,21 +353,18 @@ def _painted_strip(foreign: np.ndarray, hit: np.ndarray, width: np.ndarray, bott
     if on_bottom.size == 0:
         return None
     ii, uu = np.nonzero(labels == np.bincount(on_bottom).argmax())
-    v = (rows[top + ii] + 0.5) * scale
-    pitch = math.radians(camera.pitch_deg)
-    angle = pitch + np.arctan2(v - camera.cy_px, camera.fy_px)
-    if np.any(angle <= 1e-6):
+    row_x = [camera.ground_range_m((v + 0.5) * scale) for v in rows[top : bottom + 1]]
+    if any(x is None for x in row_x):
         return None
-    x = h / np.tan(angle)
-    y = -((c0 + uu + 0.5) * scale - camera.cx_px) * (x * math.cos(pitch) + h * math.sin(pitch)) / camera.fx_px
+    x = np.array(row_x, dtype=np.float64)[ii]
+    y = -((c0 + uu + 0.5) * scale - camera.cx_px) * _lateral_m_per_px(camera, x, 1.0)
     pts = np.column_stack([x, y])
     centred = pts - pts.mean(axis=0)
     _, _, axes = np.linalg.svd(centred, full_matrices=False)
     along, across = centred @ axes[0], centred @ axes[1]
     length = float(np.percentile(along, 98) - np.percentile(along, 2))
     thick = float(np.percentile(across, 98) - np.percentile(across, 2))
-    m_per_px = (float(np.median(x)) * math.cos(pitch) + h * math.sin(pitch)) * scale / camera.fx_px
-    lane_m = float(np.median(width[top : bottom + 1])) * m_per_px
+    lane_m = float(np.median(width[top : bottom + 1])) * _lateral_m_per_px(camera, float(np.median(x)), scale)
     square = abs(float(axes[0][0])) <= math.sin(math.radians(STRIP_ACROSS_DEG))  # the strip's direction vs the heading (x)
     # its own first row, not the stretch's: an object standing beyond the line (another patch) keeps its rows
     return top + int(ii.min()) if square and thick <= STRIP_THIN * length and length >= BAND_COVER * lane_m else None

@@ -188,7 +188,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     limits = duckiebot_limits(time_of_flight=o.range_sensor == "tof")
     camera_lanes = HoughLaneSteering(camera=camera, fps=FRAME_RATE_HZ, ground=lane)
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
-    route = world.route_m()
+    route_length = world.route_m()  # (metres, a closed loop?)
     obstacle_xz = world.add_obstacle(o.obstacle, o.ahead_m) if o.obstacle is not None else None
     drive_world = DuckietownDrive(o, world, lane.aim_m)
     lanes = NavigatedSteering(camera_lanes, lambda: drive_world.route_now, limits.max_steering_deg) if o.route else camera_lanes
@@ -203,7 +203,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     recorder = Recorder(out, fps=FRAME_RATE_HZ, video=o.video, mcap=o.mcap)
     ran = run(drive_world, controller, recorder, on_frame=on_step, total=drive_world.total)
     summary = summarize_drive(drive_world.samples, world.dt_s)
-    summary.update(route_completion(summary["progress_m"], *route))
+    summary.update(route_completion(summary["progress_m"], *route_length))
     summary.update(
         map=o.map_name, controller=o.controller, seed=o.seed, options={**asdict(o), "start_tile": o.start_tile},
         obstacle_xz_m=obstacle_xz, interrupted=ran.interrupted, aim_distance_m=lane.aim_m,

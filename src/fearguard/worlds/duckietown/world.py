@@ -338,18 +338,26 @@ class DuckietownWorld:
 
     def expert_curvature(self, lookahead_m: float) -> float:
         """Ground-truth pure pursuit: curvature (1/m, + left) of the arc to the lane centre ``lookahead_m`` ahead."""
+        aim = self._lane_point_ahead(lookahead_m)
+        if aim is None:
+            return 0.0
+        x, y = aim
+        dist2 = x * x + y * y
+        return 0.0 if dist2 < 1e-9 else 2.0 * y / dist2
+
+    def _lane_point_ahead(self, distance_m: float) -> tuple[float, float] | None:
+        """The lane-centre point ``distance_m`` along the simulator's curve from the robot's nearest, in the robot's axes
+        (ahead of the axle, left; m); None off the lane. The expert's pure-pursuit target and the route's aim point."""
         env = self.env
         point, tangent = env.closest_curve_point(env.cur_pos, env.cur_angle)
         if point is None:
-            return 0.0
-        found = self.walk(point, tangent, lookahead_m)
+            return None
+        found = self.walk(point, tangent, distance_m)
         target = found[0] if found is not None else point
         # cartesian axes (x east, y = −z north), heading a counter-clockwise
         dx, dy = float(target[0] - env.cur_pos[0]), -float(target[2] - env.cur_pos[2])
         c, s = math.cos(env.cur_angle), math.sin(env.cur_angle)
-        x, y = c * dx + s * dy, -s * dx + c * dy  # ahead, left
-        dist2 = x * x + y * y
-        return 0.0 if dist2 < 1e-9 else 2.0 * y / dist2
+        return c * dx + s * dy, -s * dx + c * dy
 
     def route_bearing_deg(self, aim_m: float) -> float | None:
         """The route's steering through a junction: the bearing (deg, + left) from the camera of the lane-centre point
@@ -365,12 +373,8 @@ class DuckietownWorld:
         ahead = self.walk(point, tangent, JUNCTION_AHEAD_M)
         if not (self._on_junction(env.cur_pos) or (ahead is not None and self._on_junction(ahead[0]))):
             return None
-        found = self.walk(point, tangent, aim_m)
-        target = found[0] if found is not None else point
-        dx, dy = float(target[0] - env.cur_pos[0]), -float(target[2] - env.cur_pos[2])
-        c, s = math.cos(env.cur_angle), math.sin(env.cur_angle)
-        x, y = c * dx + s * dy, -s * dx + c * dy  # ahead of the axle, left
-        return math.degrees(math.atan2(y, x - CAMERA_AHEAD_M))
+        aim = self._lane_point_ahead(aim_m)
+        return None if aim is None else math.degrees(math.atan2(aim[1], aim[0] - CAMERA_AHEAD_M))
 
     def _on_junction(self, pos: np.ndarray) -> bool:
         tile = self.env._get_tile(*self.env.get_grid_coords(pos))
