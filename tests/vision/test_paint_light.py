@@ -16,14 +16,14 @@ WHITE, YELLOW, MAT = (185.0, 185.0, 185.0), (20.0, 170.0, 185.0), (55.0, 55.0, 5
 
 def _scene(
     light: tuple[float, float, float], white: bool = True, yellow: bool = True, seed: int = 0,
-    yellow_bgr: tuple[float, float, float] = YELLOW,
+    yellow_bgr: tuple[float, float, float] = YELLOW, white_bgr: tuple[float, float, float] = WHITE,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A 60×120 patch of mat with a white and a yellow stripe, lit by ``light`` (BGR factors): (bgr, paint, road)."""
     rng = np.random.default_rng(seed)
     base = np.tile(np.array(MAT), (60, 120, 1)) + rng.normal(0.0, 2.0, (60, 120, 3))
     paint = np.zeros((60, 120), bool)
     if white:
-        base[:, 80:95] = WHITE
+        base[:, 80:95] = white_bgr
         paint[:, 80:95] = True
     if yellow:
         base[:, 20:30] = yellow_bgr
@@ -41,14 +41,22 @@ def _gains(bgr: np.ndarray, paint: np.ndarray, road: np.ndarray, verify: bool = 
 lights = st.tuples(*[st.floats(0.65, 1.35)] * 3)
 
 
-@settings(max_examples=60, deadline=None)
-@given(lights)
-def test_under_any_tint_the_gains_make_the_white_tape_grey_and_the_yellow_yellow(light: tuple[float, float, float]) -> None:
-    bgr, paint, road = _scene(light)
+# white tape as bright as gym-duckietown's near tape (lightness ~215): there a tint of a few per cent already lifts its
+# HLS saturation past WHITE_SAT_MAX (saturation is (max − min) / (510 − max − min) for light colours)
+BRIGHT_WHITE = (212.0, 212.0, 212.0)
+
+
+@settings(max_examples=80, deadline=None)
+@given(lights, st.sampled_from((WHITE, BRIGHT_WHITE)))
+def test_under_any_tint_the_gains_make_the_white_tape_grey_and_the_yellow_yellow(
+    light: tuple[float, float, float], white: tuple[float, float, float],
+) -> None:
+    bgr, paint, road = _scene(light, white_bgr=white)
     gains = _gains(bgr, paint, road)
     assert gains is not None
-    if pl.is_neutral(gains):  # a light within the dead band: the plain thresholds see the paint as it is
-        assert max(light) / min(light) < 1.25
+    if pl.is_neutral(gains):  # no tint measured: only where the plain thresholds already see the tape as white
+        plain = cv2.cvtColor(bgr, cv2.COLOR_BGR2HLS)
+        assert np.median(plain[:, 80:95, 2]) <= WHITE_SAT_MAX
         return
     hls = pl.balanced_hls(bgr, gains)
     assert np.median(hls[:, 80:95, 2]) <= WHITE_SAT_MAX
@@ -72,9 +80,9 @@ def test_a_split_that_is_not_clear_is_taken_when_the_other_class_is_yellow_under
     bgr, paint, road = _scene(light, yellow_bgr=PALE_YELLOW)
     assert _split(bgr, paint) < pl.SPLIT_MIN
     gains = _gains(bgr, paint, road)
-    if pl.is_neutral(gains):  # no tint measured: within the dead band, or white light explains the white tape
+    if pl.is_neutral(gains):  # no tint measured: white light explains the white tape
         plain = cv2.cvtColor(bgr, cv2.COLOR_BGR2HLS)
-        assert max(light) / min(light) < 1.25 or np.median(plain[:, 80:95, 2]) <= WHITE_SAT_MAX
+        assert np.median(plain[:, 80:95, 2]) <= WHITE_SAT_MAX
         return
     hls = pl.balanced_hls(bgr, gains)
     assert np.median(hls[:, 80:95, 2]) <= WHITE_SAT_MAX
@@ -111,6 +119,22 @@ def test_a_bluer_class_darker_than_the_other_is_the_mat_not_the_white_tape() -> 
 def test_a_white_light_changes_nothing() -> None:
     bgr, paint, road = _scene((1.0, 1.0, 1.0))
     assert pl.is_neutral(_gains(bgr, paint, road))
+
+
+def test_a_faint_tint_on_bright_tape_is_measured() -> None:
+    """gym-duckietown's ETH_intersection_map under randomised light (seed 1, 1.4 m along): the white tape read
+    (210, 232, 202), the yellow dashes (110, 220, 200) — a green tint of under 10 %, but on tape that bright the HLS
+    saturation was ~100 and the dashes' hue 35–38, so neither paint was found (confidence 0.00 for 20 s). Gains that
+    close to 1 were once rounded to white light; they are the light, and they make both paints readable again."""
+    light = (0.98, 1.08, 0.94)
+    bgr, paint, road = _scene(light, white_bgr=BRIGHT_WHITE, yellow_bgr=(115.0, 200.0, 212.0))
+    plain = cv2.cvtColor(bgr, cv2.COLOR_BGR2HLS)
+    assert np.median(plain[:, 80:95, 2]) > WHITE_SAT_MAX and np.median(plain[:, 20:30, 0]) > YELLOW_HUE[1]
+    gains = _gains(bgr, paint, road)
+    assert gains is not None and not pl.is_neutral(gains)
+    hls = pl.balanced_hls(bgr, gains)
+    assert np.median(hls[:, 80:95, 2]) <= WHITE_SAT_MAX
+    assert np.mean(_looks_yellow(hls[:, 20:30])) > 0.9
 
 
 def test_a_green_light_is_measured_as_green() -> None:

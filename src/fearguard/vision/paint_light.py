@@ -15,9 +15,12 @@ other class reads as yellow paint (``looks_yellow``). A tinted scene is not lit 
 (gym-duckietown's domain randomisation adds light and colours each tile): there the yellow keeps more blue than the
 white tape's light would leave it, and the two paints lie only ~0.5 apart in plain view of both. The gains
 are kept only if they leave the plain road no less grey than it was (a mat or asphalt is near grey under the same
-light): that rejects a split of yellow into pale and saturated dashes with no white tape in view. Gains within
-DEAD_BAND of 1 are 1, and so are they when the plain colours already call WHITE_EXPLAINED of the white class white:
-then the light is white enough, and a lighter tile or pale dashes taken for the white class tint nothing. A frame
+light): that rejects a split of yellow into pale and saturated dashes with no white tape in view. The gains are 1
+when the plain colours already call WHITE_EXPLAINED of the white class white: then the light is white enough, and a
+lighter tile or pale dashes taken for the white class tint nothing. Otherwise even a faint tint is the light: on tape
+as bright as gym-duckietown's near tape (lightness ~215) a few per cent of green lift the HLS saturation past the white
+test and turn the yellow's hue out of its band (gains of 0.93-1.07, once rounded to 1, left a randomised town map
+without either paint for 20 s). A frame
 that cannot tell (one paint in view) keeps the light measured before (ground_lanes.GroundMemory). Under a tint
 measured (or held), a ridge on the white tape's side of the split (``Light.white_b_min``) is white tape too, though
 still saturated under the light: domain randomisation gives each tile its own tint, and the next tile's tape, divided
@@ -42,7 +45,6 @@ SPLIT_MIN = 0.6  # [log-chroma] the two paints' classes must be this far apart (
 YELLOW_EXPLAINED = 0.5  # [-] a split that is not clear: this share of the other class must read as yellow under its light
 SHARE_RANGE = (0.1, 0.9)  # [-] the white class's share of the bright ridge pixels (both paints in view)
 GREY_TOLERANCE = 0.05  # [-] the gains may raise the road's channel spread by at most this
-DEAD_BAND = 0.1  # [-] gains this close to 1 are 1
 WHITE_EXPLAINED = 0.5  # [-] the plain colours call this share of the white class white: the light is white enough
 BINS, B_RANGE = 64, (-3.0, 1.5)  # histogram of b (Duckietown's yellow: -2 ... -1.2, white: -0.9 ... -0.3)
 
@@ -118,8 +120,6 @@ def measure_light(
         others = bgr[paint][~whites].reshape(-1, 1, 3)
         if np.count_nonzero(looks_yellow(balanced_hls(others, gains))) < YELLOW_EXPLAINED * len(others):
             return None
-    if float(np.max(np.abs(gains - 1.0))) < DEAD_BAND:
-        return Light(np.ones(3), None)
     return Light(gains, threshold)
 
 
