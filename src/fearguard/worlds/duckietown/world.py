@@ -47,6 +47,7 @@ OBSTACLE_MESH = {"duck": "duckie", "cone": "cone", "duckiebot": "duckiebot"}  # 
 TOF_RAYS = 11  # [-] rays across the time-of-flight cone
 ROUTE_LIMIT_M = 60.0  # [m] the longest route measured (a lap of the largest bundled loops is ~30 m)
 JUNCTION_KINDS = ("3way", "4way")  # the simulator's intersection tiles (kind prefixes)
+ROUTE_BEHIND_DEG = 90.0  # [deg] a route aim point further round than this from the camera's axis lies behind it
 JUNCTION_AHEAD_M = 0.3  # [m] the route is known from this far before a junction tile: the stop line and the approach
 #   where the lane model loses the lane (a Duckiebot at a stop line knows the junction from its AprilTag sign)
 
@@ -374,7 +375,7 @@ class DuckietownWorld:
         if not (self._on_junction(env.cur_pos) or (ahead is not None and self._on_junction(ahead[0]))):
             return None
         aim = self._lane_point_ahead(aim_m)
-        return None if aim is None else math.degrees(math.atan2(aim[1], aim[0] - CAMERA_AHEAD_M))
+        return None if aim is None else route_bearing_of(aim)
 
     def _on_junction(self, pos: np.ndarray) -> bool:
         tile = self.env._get_tile(*self.env.get_grid_coords(pos))
@@ -383,6 +384,15 @@ class DuckietownWorld:
     def close(self) -> None:
         with contextlib.suppress(Exception):  # closing a headless GL context can fail harmlessly at exit
             self.env.close()
+
+
+def route_bearing_of(aim: tuple[float, float]) -> float | None:
+    """The bearing (deg, + left) from the camera of a route's aim point (m, in the robot's axes: ahead of the axle,
+    left); None for a point behind the camera. In a junction the simulator's nearest curve can switch to another lane's
+    (regress_4way_drivable under randomised light: the aim jumped from +30° to ±175°, and the route, clipped to the
+    steering range, swung the robot off the road in 2.5 s): a route behind the robot is no route to drive."""
+    bearing = math.degrees(math.atan2(aim[1], aim[0] - CAMERA_AHEAD_M))
+    return bearing if abs(bearing) <= ROUTE_BEHIND_DEG else None
 
 
 def _angle_of(tangent: np.ndarray) -> float:
