@@ -302,6 +302,19 @@ class FearGuard:
             return held, ""
         return value, ""
 
+    def _frame_calm(self, cues: Cues, perceived: Perceived | None) -> bool:
+        """Is this frame's own lane reading calm, as the cue (the median of the last frames' confidences) is? The
+        steering held when the picture is lost must not come from the odd frame the median hides: a spurious line
+        (agreement 0, the frame's own confidence 0.00) under a calm median steered -5.8 deg, and held as the markings
+        ended it took the car out of the lane (markings_end, seed 41). Fear never falls as the confidence drops, so only
+        a frame below the median is evaluated again."""
+        analysis = perceived.analysis if perceived is not None else None
+        own = analysis.evidence.confidence if analysis is not None and analysis.evidence is not None else math.nan
+        if not math.isfinite(own) or own >= cues.lane_confidence:
+            return True
+        alone = self.rules.evaluate(replace(cues, lane_confidence=own))
+        return alone.cause_fears[Cause.ROAD] < self.rules.policy.caution_fear
+
     def _route(self, obs: Observation, notes: list[str]) -> float | None:
         """The route steering given (None: none), within the steering range; one that is no finite number is no route,
         and the reasons say so once."""
@@ -367,7 +380,7 @@ class FearGuard:
             reasons.extend(plan.reasons)
         else:
             st.recovery = Recovery()  # a new EMERGENCY starts with the full re-acquisition budget
-            if road_calm:
+            if road_calm and self._frame_calm(cues, perceived):
                 st.calm_steering.append(wanted)  # the road picture is calm: remember its steering (held if it is lost)
             elif route.steering_deg is not None:
                 wanted = route.steering_deg  # the picture in doubt, the route known: its steering (the reason is the route's)
