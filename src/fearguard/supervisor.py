@@ -312,8 +312,11 @@ class FearGuard:
         own = analysis.evidence.confidence if analysis is not None and analysis.evidence is not None else math.nan
         if not math.isfinite(own) or own >= cues.lane_confidence:
             return True
-        alone = self.rules.evaluate(replace(cues, lane_confidence=own))
-        return alone.cause_fears[Cause.ROAD] < self.rules.policy.caution_fear
+        return self._road_calm(self.rules.evaluate(replace(cues, lane_confidence=own)))
+
+    def _road_calm(self, result: FearResult) -> bool:
+        """The road picture is calm: its fear below CAUTION's."""
+        return result.cause_fears[Cause.ROAD] < self.rules.policy.caution_fear
 
     def _route(self, obs: Observation, notes: list[str]) -> float | None:
         """The route steering given (None: none), within the steering range; one that is no finite number is no route,
@@ -342,7 +345,7 @@ class FearGuard:
         # how fast the car goes now: measured, else the limit it was last given (never told to move: standing)
         now_mps = speed if speed is not None else (st.limit_mps if st.limit_mps is not None else 0.0)
         dt = 0.0 if st.last_t_s is None else t - st.last_t_s
-        road_calm = result.cause_fears[Cause.ROAD] < cfg.caution_fear
+        road_calm = self._road_calm(result)
         route_deg = self._route(obs, notes)
         object_mps = speed - closing if speed is not None and closing is not None and math.isfinite(range_m) else None
         route = next_route(st.routed_m, route_deg, road_calm, clear_m, path_doubt, speed, dt, cfg, v, t_s=t,
@@ -382,7 +385,7 @@ class FearGuard:
             st.recovery = Recovery()  # a new EMERGENCY starts with the full re-acquisition budget
             if road_calm and self._frame_calm(cues, perceived):
                 st.calm_steering.append(wanted)  # the road picture is calm: remember its steering (held if it is lost)
-            elif route.steering_deg is not None:
+            elif route.steering_deg is not None:  # (a frame the median hides is in doubt too)
                 wanted = route.steering_deg  # the picture in doubt, the route known: its steering (the reason is the route's)
             elif not choice.caution:
                 wanted, why = doubt_step(result.cause_fears[Cause.ROAD], wanted, st.trusted_steering_deg, cfg)
