@@ -77,7 +77,7 @@ PERIOD_MEMORY = 9  # [frames] gaps between frames whose median is the typical fr
 RANGE_MEMORY = 16  # [frames] obstacle ranges kept for the closing speed at cue level
 CALM_MEMORY = 3  # [frames] the steering held while the road picture is in doubt is the median of the last calm pictures' (as the
 #   confidence is of its last 3): one calm frame amid a flicker steered -7.9 deg on a gentle right arc, and held for the
-#   flicker's grace it took the car out of the lane (benchmarks/scenarios_open/pale_dashes, seed 9)
+#   flicker's grace it took the car out of the lane (the pale_dashes scenario, seed 9)
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 evidence of the line than they were (the track holds its support, vision/lane_tracker.py), so the picture does not
 flicker between trusted and lost as the dashes pass, and the car keeps driving.
 
-Not the open target's picture (``benchmarks/scenarios_open/sparse_dashes``): other dash lengths and gaps, yellow
+Not the bundled scenario's picture (``scenarios/sparse_dashes``): other dash lengths and gaps, yellow
 paint, pale concrete, turns both ways and other seeds.
 """
 

@@ -5,8 +5,12 @@ constant-velocity model (state: u_top, u_bottom and their rates, px and px/s). A
 the prediction (Mahalanobis gate) is treated as a miss, unless it persists — ``REINIT_AFTER`` outliers
 in a row, each within ``REINIT_AGREE`` of the one before — which re-initialises the track there (the lane
 really moved, e.g. a lane change). Outliers scattered over the image (a shadow edge one frame, a far dash
-the next) are noise and never move a track. A track without detections is predicted for
-``LOST_AFTER_S`` and then dropped.
+the next) are noise and never move a track. A track without detections is predicted for ``LOST_AFTER_S`` and
+then dropped. A detection measures the boundary only where its marking ridges were found (``seen_span``): a straight
+line through the dashes of a curved line in view is right at them and wrong where it is extrapolated to, so it is
+gated and folded in at two rows within that span, not at the region's ends — while the track is fresh (a line with a
+direction of its own on it within ``SUPPORT_HOLD_S``); a track that has coasted longer, its gate widened, is taken up
+again only by a line that agrees with it at the region's ends.
 
 A dashed line shows a dash or two at a time: its support (the share of rows with paint) rises and falls as the dashes
 pass. An accepted detection's support is therefore the best its track had over the last ``SUPPORT_HOLD_S`` (one dash
@@ -25,6 +29,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fearguard.sensors.kalman import kalman_filter
+from fearguard.vision.confidence import EVIDENCE_SPREAD
 from fearguard.vision.lanes import LaneLine, RoadRegion, geometry_plausibility
 
 if TYPE_CHECKING:
@@ -37,7 +42,10 @@ VELOCITY_STD = 0.15  # [-] of the width per s: a new track's rate is unknown but
 ACCEL_STD = 0.6  # [-] of the width per s²: how fast a boundary may move in the image (curves, steering)
 GATE_CHI2 = 13.8  # [-] chi-square, 2 dof, p = 0.001: detections beyond this are outliers
 REINIT_AFTER = 3  # [frames] consecutive outliers that re-initialise the track ...
-REINIT_AGREE = 0.04  # [-] of the width: ... each end point this close to the previous outlier's (they persist)
+REINIT_AGREE = 0.04  # [-] of the width: ... each end point this close to the previous outlier's (they persist) ...
+OWN_DIRECTION_SPAN = 0.1  # [-] of the region's rows: ... each with a direction of its own, seen over this span at least
+#   (``seen_span``): a line through one short dash rests on a few rows, and a track begun on it disagrees with the whole
+#   line at once (a far dash of a curved model-car line, seen for three frames, re-initialised the track 45 px off)
 LOST_AFTER_S = 1.0  # [s] a track without any detection for this long is dropped
 SUPPORT_HOLD_S = 0.6  # [s] an accepted detection's support is the best of the track's accepted detections this recent: one
 #   period of a dashed line's pattern passing the camera (a model car's 0.15 m dashes, 0.6 m gaps at 1.3 m/s: 0.58 s; a
@@ -91,30 +99,44 @@ class BoundaryTrack:
         self.kf.F, self.kf.Q = self._F, self._Q
         self.kf.predict()
 
-    def update(self, t_s: float, z: np.ndarray | None) -> bool:
-        """Fold in a detection (u_top, u_bottom) or a miss; True if the detection was accepted."""
+    def update(self, t_s: float, z: np.ndarray | None, h: np.ndarray | None = None, span: float = 1.0) -> bool:
+        """Fold in a detection or a miss; True if the detection was accepted. ``z``: the detection's columns (u_top,
+        u_bottom) at the region's ends, or — with ``h`` (2×2: each row the weights of u_top and u_bottom at one image
+        row) — at two rows where it was seen (``seen_span``); ``span``: the share of the region's rows those two span.
+        A detection with no direction of its own (``span`` below ``OWN_DIRECTION_SPAN``: one short dash, a speck) is
+        evidence where it agrees, but it neither moves the track nor keeps it alive: a track fed only by such specks
+        for ``LOST_AFTER_S`` is dropped. And past ``SUPPORT_HOLD_S`` without a line of its own direction, a detection is
+        judged at the region's ends again. (On worn concrete after the markings end, specks and a partial line on the
+        verge's edge, each accepted where it was seen by a track whose gate had widened for half a second, kept the
+        last line's track — a side of the lane — alive and drifting onto the verge, and the creep steered by it.)"""
+        if self.kf is not None and t_s - self.last_seen_s > LOST_AFTER_S:
+            self.kf = None  # nothing with a direction of its own found on it for that long
         if z is None:
-            if t_s - self.last_seen_s > LOST_AFTER_S:
-                self.kf = None
             return False
+        own_direction = span >= OWN_DIRECTION_SPAN
         if self.kf is None:
-            self._begin(z)
+            self._begin(_ends(z, h))
             self.last_seen_s, self.outliers, self.pending = t_s, 0, None
             return True
-        # innovation and its covariance: H picks (u_top, u_bottom), so H·x and H·P·Hᵀ are slices
-        y = z - self.kf.x[:2]
-        s = self.kf.P[:2, :2] + self.kf.R
+        if h is not None and t_s - self.last_seen_s > SUPPORT_HOLD_S + 1e-9:  # coasted past a dash period: only the whole
+            z, h = _ends(z, h), None  # line, judged at its ends, takes the track up again
+        # innovation and its covariance: H picks combinations of (u_top, u_bottom), so H·x and H·P·Hᵀ use the first two
+        h2 = np.eye(2) if h is None else h
+        y = z - h2 @ self.kf.x[:2]
+        s = h2 @ self.kf.P[:2, :2] @ h2.T + self.kf.R
         if _mahalanobis2(y, s) > GATE_CHI2:
-            persists = self.pending is not None and float(np.max(np.abs(z - self.pending))) <= REINIT_AGREE * self.width_px
-            self.outliers, self.pending = (self.outliers + 1 if persists else 1), z
-            if self.outliers < REINIT_AFTER:
-                if t_s - self.last_seen_s > LOST_AFTER_S:
-                    self.kf = None
+            ends = _ends(z, h2) if own_direction else None  # a speck cannot move the track
+            persists = (ends is not None and self.pending is not None
+                        and float(np.max(np.abs(ends - self.pending))) <= REINIT_AGREE * self.width_px)
+            self.outliers, self.pending = (self.outliers + 1 if persists else 1), ends
+            if self.outliers < REINIT_AFTER or ends is None:
                 return False
-            self._begin(z)
-        else:
-            self.kf.update(z, H=self.kf.H)  # H given: z is already the right shape (filterpy skips reshaping it)
-        self.last_seen_s, self.outliers, self.pending = t_s, 0, None
+            self._begin(ends)
+            self.last_seen_s = t_s
+        elif own_direction:
+            self.kf.update(z, H=np.hstack([h2, np.zeros((2, 2))]))  # H given: z is already the right shape (filterpy skips reshaping it)
+            self.last_seen_s = t_s
+        self.outliers, self.pending = 0, None
         return True
 
     def held_support(self, t_s: float, support: float) -> float:
@@ -133,6 +155,29 @@ class BoundaryTrack:
         u_top, u_bottom = float(self.kf.x[0]), float(self.kf.x[1])
         slope = (u_bottom - u_top) / max(1, region.bottom_v_px - region.top_v_px)
         return LaneLine(slope, u_top - slope * region.top_v_px, 0.0, 0)
+
+
+def seen_span(line: LaneLine, region: RoadRegion) -> tuple[np.ndarray, np.ndarray, float]:
+    """The detection as a measurement where it was seen: its columns at the region's top and bottom rows, each moved
+    into the span of its ridge rows (mean ± EVIDENCE_SPREAD standard deviations, as ``confidence.agreement`` compares),
+    the matrix that gives those columns from the track's (u_top, u_bottom), and the share of the region's rows between
+    the two. A line seen over the whole region is measured at its ends, as before."""
+    top, bottom = float(region.top_v_px), float(region.bottom_v_px)
+    rows = [top, bottom]
+    if line.rows is not None:
+        lo = line.rows.mean_v_px - EVIDENCE_SPREAD * line.rows.std_v_px
+        hi = line.rows.mean_v_px + EVIDENCE_SPREAD * line.rows.std_v_px
+        rows = [min(hi, max(lo, v)) for v in rows]
+        if rows[1] - rows[0] < 1.0:  # a span under a pixel: no direction to measure; one row and its neighbour
+            rows = [min(rows[0], bottom - 1.0), min(rows[0], bottom - 1.0) + 1.0]
+    span = max(1.0, bottom - top)
+    h = np.array([[(bottom - v) / span, (v - top) / span] for v in rows])
+    return np.array([line.u_at(v) for v in rows]), h, (rows[1] - rows[0]) / span
+
+
+def _ends(z: np.ndarray, h: np.ndarray | None) -> np.ndarray:
+    """A measurement at two rows extended to the region's ends (u_top, u_bottom): a new track starts from the line."""
+    return z if h is None else np.linalg.solve(h, z)
 
 
 def _inverse_2x2(s: np.ndarray) -> np.ndarray:
@@ -189,8 +234,8 @@ class LaneTracker:
         for track, line in zip(self._tracks, (left, right), strict=True):
             track.predict(dt)
             predicted.append(track.line(region))
-            z = None if line is None else np.array([line.u_at(region.top_v_px), line.u_at(region.bottom_v_px)])
-            ok = track.update(self._last_t_s, z)
+            z, h, span = (None, None, 0.0) if line is None else seen_span(line, region)
+            ok = track.update(self._last_t_s, z, h, span)
             accepted.append(ok)
             held.append(track.held_support(self._last_t_s, line.support) if ok and line is not None else 0.0)
         if accepted[0] and accepted[1] and left is not None and right is not None:
