@@ -72,9 +72,27 @@ def _tracked(u_top: float, u_bottom: float) -> BoundaryTrack:
     SeenRows, st.integers(2, 80), st.floats(REGION.top_v_px, REGION.bottom_v_px), st.floats(86, 300)))
 def test_a_line_seen_over_the_region_is_measured_at_its_ends(u_top: float, u_bottom: float, rows: SeenRows | None) -> None:
     """Whole-region evidence (no rows known, or a spread reaching past both ends): the measurement is the line's ends."""
-    z, h, _ = seen_span(_through(u_top, u_bottom, rows), REGION)
-    np.testing.assert_allclose(h, np.eye(2), atol=1e-12)
+    z, h, span = seen_span(_through(u_top, u_bottom, rows), REGION)
+    assert h is None and span == 1.0
     np.testing.assert_allclose(z, [u_top, u_bottom], atol=1e-9)
+
+
+@given(top=st.integers(0, 300), height=st.integers(0, 3), mean=st.floats(-1e3, 1e3), std=st.floats(0.0, 1e3),
+       slope=st.floats(-50.0, 50.0), intercept=st.floats(-1e3, 1e3))
+def test_any_detection_gives_a_measurement_a_track_can_take(top: int, height: int, mean: float, std: float, slope: float,
+                                                            intercept: float) -> None:
+    """Whatever the region (even one or two rows high) and the rows a line was seen on, the measurement is finite, its
+    matrix invertible, and a new track begins on it and judges the next one without an error."""
+    region = RoadRegion(WIDTH_PX, top + height + 1, top, top + height, ((0, top + height), (0, top), (WIDTH_PX, top)))
+    line = LaneLine(slope, intercept, 0.5, 1, SeenRows(5, mean, std))
+    z, h, span = seen_span(line, region)
+    assert np.all(np.isfinite(z)) and 0.0 <= span <= 1.0 + 1e-9
+    assert h is None or abs(np.linalg.det(h)) > 1e-9
+    track = BoundaryTrack(WIDTH_PX)
+    assert track.update(0.0, z, h, span)
+    track.predict(0.05)
+    track.update(0.05, z, h, span)
+    assert np.all(np.isfinite(track.kf.x))
 
 
 @settings(max_examples=200)

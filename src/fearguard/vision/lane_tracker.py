@@ -157,20 +157,25 @@ class BoundaryTrack:
         return LaneLine(slope, u_top - slope * region.top_v_px, 0.0, 0)
 
 
-def seen_span(line: LaneLine, region: RoadRegion) -> tuple[np.ndarray, np.ndarray, float]:
+def seen_span(line: LaneLine, region: RoadRegion) -> tuple[np.ndarray, np.ndarray | None, float]:
     """The detection as a measurement where it was seen: its columns at the region's top and bottom rows, each moved
     into the span of its ridge rows (mean ± EVIDENCE_SPREAD standard deviations, as ``confidence.agreement`` compares),
     the matrix that gives those columns from the track's (u_top, u_bottom), and the share of the region's rows between
-    the two. A line seen over the whole region is measured at its ends, as before."""
+    the two. A line seen over the whole region — or whose rows are not known, or a region under two rows high — is
+    measured at its ends, as before (matrix None: the identity)."""
     top, bottom = float(region.top_v_px), float(region.bottom_v_px)
-    rows = [top, bottom]
-    if line.rows is not None:
-        lo = line.rows.mean_v_px - EVIDENCE_SPREAD * line.rows.std_v_px
-        hi = line.rows.mean_v_px + EVIDENCE_SPREAD * line.rows.std_v_px
-        rows = [min(hi, max(lo, v)) for v in rows]
-        if rows[1] - rows[0] < 1.0:  # a span under a pixel: no direction to measure; one row and its neighbour
-            rows = [min(rows[0], bottom - 1.0), min(rows[0], bottom - 1.0) + 1.0]
-    span = max(1.0, bottom - top)
+    ends = np.array([line.u_at(top), line.u_at(bottom)])
+    if line.rows is None or bottom - top < 2.0:
+        return ends, None, 1.0
+    lo = line.rows.mean_v_px - EVIDENCE_SPREAD * line.rows.std_v_px
+    hi = line.rows.mean_v_px + EVIDENCE_SPREAD * line.rows.std_v_px
+    rows = [min(hi, max(lo, v)) for v in (top, bottom)]
+    if not rows[1] - rows[0] >= 1.0:  # a span under a pixel: no direction to measure; one row and its neighbour
+        v = min(max(rows[0], top), bottom - 1.0) if rows[0] == rows[0] else top
+        rows = [v, v + 1.0]
+    if rows == [top, bottom]:
+        return ends, None, 1.0
+    span = bottom - top
     h = np.array([[(bottom - v) / span, (v - top) / span] for v in rows])
     return np.array([line.u_at(v) for v in rows]), h, (rows[1] - rows[0]) / span
 
