@@ -132,3 +132,26 @@ def test_a_frame_the_confidence_median_hides_is_no_calm_picture(name: str, calm:
             held.append(cmd.steering_deg)
     assert held, "the picture was lost and something was held"
     assert all(math.isclose(h, calm, abs_tol=1e-9) for h in held), (held, calm, odd)
+
+
+@settings(max_examples=6, deadline=None)
+@given(name=st.sampled_from(("clear_straight", "steering_bias")), toward=st.floats(12.0, 25.0), side=st.sampled_from((-1.0, 1.0)))
+def test_an_estimator_caught_leaving_the_lane_is_not_trusted_again_when_the_picture_is_lost(name: str, toward: float,
+                                                                                           side: float) -> None:
+    """The lane check catches an estimator steering out of the lane on a calm picture; then the markings are gone. The
+    picture in doubt does not hand the car back to the estimator, nor to the doubt's held angle: the lane check's
+    answer (the lane geometry's last angle) steers, at its reduced speed, with its reason."""
+    frames, camera = _drive(name)
+    vehicle = replace(fg.VehicleLimits.preset("model_car"), has_qr_localisation=False)
+    guard = fg.FearGuard(lambda frame: side * toward, vehicle=vehicle, camera=camera)
+    caught, doubted = False, 0
+    for k, frame in enumerate([*frames[:10], *(_markings_gone(f) for f in frames[10:16])]):
+        cmd = guard.step(fg.Observation(t_s=0.05 * k, speed_mps=1.0, frame=frame, ultrasonic_range_m=3.0))
+        caught = caught or any(r.startswith("lane check") for r in cmd.reasons)
+        if k >= 12 and cmd.mode is not fg.Mode.EMERGENCY:  # the markings gone, the picture in doubt
+            assert caught
+            assert any("estimator steered out of the lane when last checked" in r for r in cmd.reasons), cmd.reasons
+            assert not any("holding the steering of the last calm picture" in r for r in cmd.reasons)
+            assert abs(cmd.steering_deg) < toward - 5.0  # not the estimator's angle
+            doubted += 1
+    assert doubted, "the picture in doubt before an EMERGENCY answered it"
