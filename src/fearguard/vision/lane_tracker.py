@@ -53,6 +53,7 @@ SUPPORT_HOLD_S = 0.6  # [s] an accepted detection's support is the best of the t
 PAIRED_MIN_EVIDENCE = 0.5  # [-] mean support × geometry of a pair that was a lane: both sides accepted and seen well together
 #   (two weak lines in worn concrete or a verge's texture that happen to make a plausible pair are no lane)
 DEFAULT_DT_S = 0.05  # [s] used on the first frame and when time does not advance
+_IDENTITY = np.eye(2)  # the measurement weights of a line measured at the region's ends (read only)
 
 
 class BoundaryTrack:
@@ -121,11 +122,11 @@ class BoundaryTrack:
         if h is not None and t_s - self.last_seen_s > SUPPORT_HOLD_S + 1e-9:  # coasted past a dash period: only the whole
             z, h = _ends(z, h), None  # line, judged at its ends, takes the track up again
         # innovation and its covariance: H picks combinations of (u_top, u_bottom), so H·x and H·P·Hᵀ use the first two
-        h2 = np.eye(2) if h is None else h
+        h2 = _IDENTITY if h is None else h
         y = z - h2 @ self.kf.x[:2]
         s = h2 @ self.kf.P[:2, :2] @ h2.T + self.kf.R
         if _mahalanobis2(y, s) > GATE_CHI2:
-            ends = _ends(z, h2) if own_direction else None  # a speck cannot move the track
+            ends = _ends(z, h) if own_direction else None  # a speck cannot move the track
             persists = (ends is not None and self.pending is not None
                         and float(np.max(np.abs(ends - self.pending))) <= REINIT_AGREE * self.width_px)
             self.outliers, self.pending = (self.outliers + 1 if persists else 1), ends
@@ -134,7 +135,8 @@ class BoundaryTrack:
             self._begin(ends)
             self.last_seen_s = t_s
         elif own_direction:
-            self.kf.update(z, H=np.hstack([h2, np.zeros((2, 2))]))  # H given: z is already the right shape (filterpy skips reshaping it)
+            # H given: z is already the right shape (filterpy skips reshaping it); the filter's own H for a whole-region line
+            self.kf.update(z, H=self.kf.H if h is None else np.hstack([h, np.zeros((2, 2))]))
             self.last_seen_s = t_s
         self.outliers, self.pending = 0, None
         return True
