@@ -23,6 +23,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
+from fearguard.vision.exposure import SATURATED_MIN
 from fearguard.vision.ridges import RidgeMaps, ridge_maps, scan_ridges
 
 WORK_WIDTH_PX = 320  # [px] frames are analysed at this width (aspect kept): the cost is then fixed
@@ -258,8 +259,10 @@ def marking_features(
 
 
 _YELLOW_CHROMA = YELLOW_SAT_MIN * YELLOW_LIGHT_MIN  # saturation × lightness of yellow paint at the least (YELLOW_LIGHT_MIN)
-# the least ridge that is bright over each background lightness b: ≥ RIDGE_MIN and ≥ RIDGE_RATIO·b (as float, rounded up)
-_BRIGHT_MIN = np.maximum(RIDGE_MIN, np.ceil(RIDGE_RATIO * np.arange(256))).astype(np.uint8)
+# the least ridge that is bright over each background lightness b: ≥ RIDGE_MIN and ≥ RIDGE_RATIO·b (as float, rounded up);
+# over a background too bright for the ratio to fit under the clip (b > ~217: glare's veil), paint reaching the clip
+# (SATURATED_MIN) is as bright as the camera can show it: the ratio is not seen there, RIDGE_MIN still is
+_BRIGHT_MIN = np.maximum(RIDGE_MIN, np.minimum(np.ceil(RIDGE_RATIO * np.arange(256)), SATURATED_MIN - np.arange(256))).astype(np.uint8)
 
 
 def smoothed_light(hls: np.ndarray) -> np.ndarray:

@@ -21,11 +21,14 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
+from fearguard.vision.exposure import SATURATED_MIN
+
 WIDTH_RANGE = (0.012, 0.12)  # [-] of the lane width at the row: narrowest and widest paint (road lanes: 10-30 cm of 3-3.7 m)
 MIN_WIDTH_PX = 1.0  # [px] a ridge is at least this wide (far rows)
 MAX_WIDTH_FLOOR = 0.02  # [-] of the image width: a ridge this wide is always plausible (far paint, blurred; a lane-width prior that is off)
 SEARCH = 0.03  # [-] of the image width: the run must reach within this of the candidate line
-CONTRAST_RATIO = 1.12  # [-] paint is at least this many times brighter than its flanks (illumination invariant)
+CONTRAST_RATIO = 1.12  # [-] paint is at least this many times brighter than its flanks (illumination invariant), or
+#                        clipped (exposure.SATURATED_MIN: glare's veil lifts the road until no ratio fits under the clip)
 CONTRAST_MIN = 6.0  # [grey levels] ... and at least this much brighter (sensor noise)
 FLANK_PAINT_MAX = 0.25  # [-] share of marking pixels a flank may hold (the road beside paint is plain)
 FLANK_ROUGHNESS = 0.45  # [-] flank standard deviation may be at most this share of the paint's contrast
@@ -169,7 +172,8 @@ def scan_ridges(
         mean, sq = means[1::2, f], means[2::2, f]
         std = np.sqrt(np.maximum(sq - mean * mean, 0.0))
         contrast = paint - mean
-        passes = (paint >= CONTRAST_RATIO * mean) & (contrast >= CONTRAST_MIN) & (std <= FLANK_ROUGHNESS * contrast)
+        bright = (paint >= CONTRAST_RATIO * mean) | (paint >= SATURATED_MIN)  # clipped paint: no ratio fits under the clip
+        passes = bright & (contrast >= CONTRAST_MIN) & (std <= FLANK_ROUGHNESS * contrast)
         passes &= means[0, f] <= FLANK_PAINT_MAX  # the road beside paint holds (almost) no paint
         passes |= count[f] == 0  # a flank outside the image says nothing (lines leaving sideways)
         stands_out = passes if stands_out is None else stands_out & passes
