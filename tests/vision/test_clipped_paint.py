@@ -70,3 +70,18 @@ def test_a_pale_line_that_does_not_reach_the_clip_on_bright_asphalt_is_not_paint
     grey = (asphalt, asphalt - 2, asphalt - 1)
     found, _ = _left_found([road(grey, (line,) * 3, (255, 255, 255), seed + i) for i in range(4)])
     assert not found
+
+
+@settings(max_examples=20, deadline=None)
+@given(flank_sat=st.integers(int(255 / ridges.CONTRAST_RATIO) + 1, 245), light=st.integers(60, 200))
+def test_a_saturation_at_its_ceiling_is_no_clipped_paint(flank_sat: int, light: int) -> None:
+    """Glare lifts lightness, not saturation: a stripe of saturation 255 beside saturation too high for the ratio, as
+    light as its flanks (an orange mat's edge in sunset light), is no ridge."""
+    lightness = np.full((H, W), light, np.uint8)
+    sat = np.full((H, W), flank_sat, np.uint8)
+    sat[:, 100:104] = 255
+    feat = np.zeros((H, W), np.uint8)
+    feat[:, 100:104] = 255
+    maps = ridges.ridge_maps((lightness, sat), feat, 0, H - 1)
+    scan = ridges.scan_ridges(maps, ROWS, np.full((1, H), 102.0), np.full(H, 100.0), np.array([True]))
+    assert not scan.ok.any()

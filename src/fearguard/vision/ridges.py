@@ -167,12 +167,14 @@ def scan_ridges(
     count = hi - lo
     means = _span_sums(maps.integrals, r, lo, hi) / np.maximum(count, 1)  # (layers, spans, points)
     paint = means[1::2, 0]  # each channel's mean over the run
+    clipped = np.zeros(paint.shape, bool)
+    clipped[0] = paint[0] >= SATURATED_MIN  # lightness only: glare's veil lifts the road's lightness, not its saturation
     stands_out = None
     for f in (1, 2):  # the flanks
         mean, sq = means[1::2, f], means[2::2, f]
         std = np.sqrt(np.maximum(sq - mean * mean, 0.0))
         contrast = paint - mean
-        bright = (paint >= CONTRAST_RATIO * mean) | (paint >= SATURATED_MIN)  # clipped paint: no ratio fits under the clip
+        bright = (paint >= CONTRAST_RATIO * mean) | clipped  # clipped paint: no ratio fits under the clip
         passes = bright & (contrast >= CONTRAST_MIN) & (std <= FLANK_ROUGHNESS * contrast)
         passes &= means[0, f] <= FLANK_PAINT_MAX  # the road beside paint holds (almost) no paint
         passes |= count[f] == 0  # a flank outside the image says nothing (lines leaving sideways)
