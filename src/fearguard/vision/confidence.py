@@ -54,6 +54,15 @@ class LaneEvidence:
         return _unit(best * self.geometry * self.agreement)
 
 
+def seen_rows(line: LaneLine) -> tuple[float, float] | None:
+    """The image rows a detection was seen over: its ridge rows' mean ± EVIDENCE_SPREAD standard deviations (None: not
+    known). The agreement compares there, and the lane tracker measures there (``lane_tracker.seen_span``)."""
+    if line.rows is None:
+        return None
+    return (line.rows.mean_v_px - EVIDENCE_SPREAD * line.rows.std_v_px,
+            line.rows.mean_v_px + EVIDENCE_SPREAD * line.rows.std_v_px)
+
+
 def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadRegion, lane_width_px: float) -> float:
     """1 when the detected boundary lies on the tracked one (mid and bottom rows), 0 at AGREEMENT_SCALE of a lane width apart.
 
@@ -62,10 +71,9 @@ def agreement(measured: LaneLine | None, tracked: LaneLine | None, region: RoadR
     if measured is None or tracked is None or lane_width_px <= 0:
         return 1.0
     rows = (0.5 * (region.top_v_px + region.bottom_v_px), float(region.bottom_v_px))  # the far end swings most in curves
-    if measured.rows is not None:
-        lo = measured.rows.mean_v_px - EVIDENCE_SPREAD * measured.rows.std_v_px
-        hi = measured.rows.mean_v_px + EVIDENCE_SPREAD * measured.rows.std_v_px
-        rows = tuple(min(hi, max(lo, v)) for v in rows)
+    seen = seen_rows(measured)
+    if seen is not None:
+        rows = tuple(min(seen[1], max(seen[0], v)) for v in rows)
     err = sum(abs(measured.u_at(v) - tracked.u_at(v)) for v in rows) / len(rows)
     return max(0.0, 1.0 - err / (AGREEMENT_SCALE * lane_width_px))
 

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from fearguard.sensors.kalman import kalman_filter
-from fearguard.vision.confidence import EVIDENCE_SPREAD
+from fearguard.vision.confidence import seen_rows
 from fearguard.vision.lanes import LaneLine, RoadRegion, geometry_plausibility
 
 if TYPE_CHECKING:
@@ -161,17 +161,16 @@ class BoundaryTrack:
 
 def seen_span(line: LaneLine, region: RoadRegion) -> tuple[np.ndarray, np.ndarray | None, float]:
     """The detection as a measurement where it was seen: its columns at the region's top and bottom rows, each moved
-    into the span of its ridge rows (mean ± EVIDENCE_SPREAD standard deviations, as ``confidence.agreement`` compares),
+    into the span of its ridge rows (``confidence.seen_rows``, where ``confidence.agreement`` compares),
     the matrix that gives those columns from the track's (u_top, u_bottom), and the share of the region's rows between
     the two. A line seen over the whole region — or whose rows are not known, or a region under two rows high — is
     measured at its ends, as before (matrix None: the identity)."""
     top, bottom = float(region.top_v_px), float(region.bottom_v_px)
     ends = np.array([line.u_at(top), line.u_at(bottom)])
-    if line.rows is None or bottom - top < 2.0:
+    seen = seen_rows(line)
+    if seen is None or bottom - top < 2.0:
         return ends, None, 1.0
-    lo = line.rows.mean_v_px - EVIDENCE_SPREAD * line.rows.std_v_px
-    hi = line.rows.mean_v_px + EVIDENCE_SPREAD * line.rows.std_v_px
-    rows = [min(hi, max(lo, v)) for v in (top, bottom)]
+    rows = [min(seen[1], max(seen[0], v)) for v in (top, bottom)]
     if not rows[1] - rows[0] >= 1.0:  # a span under a pixel: no direction to measure; one row and its neighbour
         v = min(max(rows[0], top), bottom - 1.0) if rows[0] == rows[0] else top
         rows = [v, v + 1.0]
