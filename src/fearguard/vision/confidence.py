@@ -7,11 +7,13 @@ holds (``held``: the best of its last SUPPORT_HOLD_S, so a dashed line does not 
 picture, where a weaker line is sparser paint, not paint the noise hid. ``geometry`` is 1 when the
 lane width at the region's middle row and the vanishing point are plausible for a forward camera, falling linearly
 to 0 outside; ``agreement`` (1 without history) compares the detection with the tracked estimate.
-``visibility`` = (1 − occlusion / OCCLUDED_BLIND) × (1 − clipped share / CLIPPED_BLIND)
-× (1 − NOISE_WEIGHT · (1 − min(1, S/N / SNR_ACCEPTABLE))): a boundary found on the visible part of the road says
-nothing about the hidden part, clipped (saturated or black) pixels carry no information at all, and a picture whose
-noise is a large share of its signal (night: dark and noisy) supports what it shows less — so washed-out, dark, noisy
-and hidden markings all lower the confidence, while dim light with a clean picture (deep shade by day) does not.
+``visibility`` = (1 − hidden / OCCLUDED_BLIND) × (1 − clipped share / CLIPPED_BLIND)
+× (1 − NOISE_WEIGHT · (1 − min(1, S/N / SNR_ACCEPTABLE))), hidden being the share of both boundaries' expected
+samples hidden (``occlusion.HiddenMarkings.share``, or the lane hidden beyond an object): a boundary found on the
+visible part of the road says nothing about the hidden part, clipped (saturated or black) pixels carry no information
+at all, and a picture whose noise is a large share of its signal (night: dark and noisy) supports what it shows less —
+so washed-out, dark, noisy and hidden markings all lower the confidence, while dim light with a clean picture (deep
+shade by day) does not.
 """
 
 from __future__ import annotations

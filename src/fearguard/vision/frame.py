@@ -46,7 +46,7 @@ from fearguard.vision.lanes import (
 )
 from fearguard.vision.lead import detect_lead, lead_from_box
 from fearguard.vision.obstacle import Obstacle, RoutePath, lane_hidden_beyond, search_lane
-from fearguard.vision.occlusion import default_lines, occlusion, road_appearance, road_reference, surface_maps
+from fearguard.vision.occlusion import default_lines, hidden_markings, road_appearance, road_reference, surface_maps
 from fearguard.vision.qr import detect_qr
 from fearguard.vision.steering import aim_point_u, lookahead_row, steering_from_aim
 from fearguard.vision.trackers import Trackers
@@ -226,7 +226,9 @@ class LeadAndOcclusion:
 
     box: LeadBox | None
     lead: Lead | None
-    occlusion: float
+    occlusion: float  # [0..1] the cue (occlusion.HiddenMarkings.occlusion, or the lane hidden beyond an object)
+    hidden_share: float  # [0..1] of both boundaries' expected samples hidden (or the lane beyond an object): what the lane
+    #   confidence discounts
     road_reference: float  # grey level of the road just ahead
     obstacle: Obstacle | None = None  # anything standing in the ego lane (needs the camera's mounting height)
     searched_m: float = 0.0  # [m] how far ahead the object search looked along the lane (0: it did not run)
@@ -338,11 +340,14 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
     surface = surface_maps(p.gray, hls, lanes.features, p.region, lanes.paint_integral)
     measured = road_appearance(p.gray, hls, p.region, expected_l, expected_r, surface, interior=lanes.interior)
     road = trackers.road.reference(measured)
-    occ = occlusion(p.gray, hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface, curves=lanes.expected)
+    hidden = hidden_markings(p.gray, hls, lanes.features, p.region, expected_l, expected_r, road, boxes, surface,
+                             curves=lanes.expected)
+    beyond = 0.0
     if p.camera.mount_height_m is None and _seen_well(lanes):
         # without a range, an object in the lane seen hides the lane beyond it (docs/perception.md, "occlusion")
-        occ = max(occ, lane_hidden_beyond(p.gray, surface, road, p.region, lanes.left, lanes.right, boxes))
-    trackers.road.learn(measured, occ)
+        beyond = lane_hidden_beyond(p.gray, surface, road, p.region, lanes.left, lanes.right, boxes)
+    hidden_share = max(hidden.share, beyond)
+    trackers.road.learn(measured, hidden_share)
     obstacle, searched_m, stop_line_m = None, 0.0, None
     # a range needs the mounting height (without it the search is skipped). The bending lane model searches its own
     # interior, round the curve (the straight chords between its boundaries cut across the verge there), and on the
@@ -366,8 +371,8 @@ def find_lead_and_occlusion(p: Prepared, lanes: Lanes, trackers: Trackers, t_s: 
         obstacle, stop_line_m = found_in_lane.obstacle, found_in_lane.stop_line_m
     obstacle = trackers.obstacles.update(obstacle)
     lead = lead_from_box(box, p.camera) if box is not None else None
-    return LeadAndOcclusion(box=box, lead=lead, occlusion=occ, road_reference=reference, obstacle=obstacle, searched_m=searched_m,
-                            stop_line_m=stop_line_m)
+    return LeadAndOcclusion(box=box, lead=lead, occlusion=max(hidden.occlusion, beyond), hidden_share=hidden_share,
+                            road_reference=reference, obstacle=obstacle, searched_m=searched_m, stop_line_m=stop_line_m)
 
 
 SEEN_WELL_SUPPORT = 0.5  # [-] both boundaries' marking support at least this: the lane is seen, and its interior is where it is
@@ -447,7 +452,7 @@ def _analyze(
     t2 = clock()
     seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box, speed_mps, path)
     t3 = clock()
-    evidence = judge_confidence(p, lanes, seen.occlusion)
+    evidence = judge_confidence(p, lanes, seen.hidden_share)
     confidence = trackers.confidence.update(evidence.confidence)
     t4 = clock()
     payloads = read_qr(p) if qr else ()

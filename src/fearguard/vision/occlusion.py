@@ -11,7 +11,9 @@ darker than any shadow, or strongly coloured but not yellow (car paint), or smoo
 a box, a sheet are smooth). A shadow keeps the road's texture and colour and is only darker: it is road.
 A sample on a row that is uniformly road-like across the whole road (ego lane ± a lane width) is road too
 (pale concrete after dark asphalt, a shadow across the road). Samples inside a known vehicle box are hidden.
-occlusion = hidden / samples.
+occlusion = max(hidden / samples, min(the most hidden boundary's own share, ONE_SIDE_MAX)): an object over one line
+hides that line as much as its share says, not half of it; one line hidden whole is half the markings, as the share of
+both says. The lane confidence discounts hidden / samples (it averages the two boundaries' evidence).
 """
 
 from __future__ import annotations
@@ -51,6 +53,8 @@ MODEL_FRAMES = 15  # [frames] the road appearance is the median of this many rec
 MODEL_CHANGE_FRAMES = 10  # [frames] ... and re-learnt after this many frames in a row unlike it (the road changed)
 MODEL_GREY_RATIO = 1.35  # [-] a frame's road this much brighter or darker than the model is unlike it ...
 MODEL_ROUGH_RATIO = 2.0  # [-] ... as is one this much rougher or smoother
+ONE_SIDE_MAX = 0.5  # [-] one boundary's hidden share counts up to this: hidden entirely, the other seen whole, it is half the
+#   markings, as the share of both says; only both hidden is more
 LEARN_OCCLUSION_MAX = 0.15  # [-] frames with more occlusion than this do not teach the model
 _INTERIOR_FRACTIONS = np.linspace(0.2, 0.8, 5)  # [-] of the lane width: where road_appearance samples each row
 ACROSS_ROAD = np.linspace(-0.9, 1.9, ROW_SAMPLES)  # [-] of the lane width: row_references' points across the road
@@ -269,12 +273,30 @@ def hidden_at(
     return int(hidden.sum()), len(rows)
 
 
-def occlusion(
+@dataclass(frozen=True)
+class HiddenMarkings:
+    """How much of the expected marking region something foreign hides: of both boundaries' samples together, and of the
+    most hidden boundary's own."""
+
+    share: float  # [0..1] hidden samples / samples, both boundaries together (what the lane confidence discounts)
+    worst_side: float  # [0..1] the most hidden boundary's own share
+
+    @property
+    def occlusion(self) -> float:
+        """The occlusion cue: the share of both, or the most hidden boundary's own share up to ONE_SIDE_MAX — an object
+        over one line hides that line as much as its share there says, not half of it."""
+        return max(self.share, min(self.worst_side, ONE_SIDE_MAX))
+
+
+NOTHING_SEEN = HiddenMarkings(1.0, 1.0)
+
+
+def hidden_markings(
     gray: np.ndarray, hls: np.ndarray, features: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine,
     road: RoadAppearance | float, boxes: tuple[tuple[int, int, int, int], ...] = (), maps: SurfaceMaps | None = None,
     curves: tuple[tuple[np.ndarray, np.ndarray], ...] | None = None,
-) -> float:
-    """Occlusion 0..1 over both expected boundaries (1 when no boundary is in view at all). road: the road's
+) -> HiddenMarkings:
+    """The hidden shares of the expected boundaries (all 1 when no boundary is in view at all). road: the road's
     appearance (``road_appearance`` or ``RoadModel``); a bare grey level (the road reference) is accepted too.
     maps: this frame's ``surface_maps`` (computed here when not given). curves: the expected boundaries as image
     points (rows, columns) when the lane model bends (``ground_lanes.expected_points``); the lines then only say
@@ -288,9 +310,8 @@ def occlusion(
     if curves is None:  # both straight boundaries sampled on every sample row
         v = rows.astype(float)
         curves = tuple((rows, np.rint(line.u_at(v)).astype(np.int64)) for line in (left, right))
-    if not curves:
-        return 1.0  # no boundary expected anywhere: nothing of them is seen
-    # every sample of both boundaries judged in one pass (each sample on its own: the shares add up)
-    hidden, n = hidden_at(maps, region, np.concatenate([r for r, _ in curves]), np.concatenate([c for _, c in curves]), road,
-                          row_ref, boxes)
-    return float(hidden / n) if n else 1.0
+    per_side = [hidden_at(maps, region, r, c, road, row_ref, boxes) for r, c in curves]  # each sample on its own
+    hidden, n = sum(h for h, _ in per_side), sum(m for _, m in per_side)
+    if not n:
+        return NOTHING_SEEN  # no boundary expected anywhere in view: nothing of them is seen
+    return HiddenMarkings(hidden / n, max(h / m for h, m in per_side if m))
