@@ -17,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from fearguard.vision.frame import FramePipeline
+from fearguard.vision.lanes import BOTTOM_FRACTION, TOP_FRACTION
 
 W, H = 640, 360
 WARM = 6
@@ -40,15 +41,14 @@ def lane_columns(v: float) -> tuple[float, float]:
     return W / 2 - t * (W / 2 - 0.12 * W), W / 2 + t * (0.88 * W - W / 2)
 
 
-def with_box(img: np.ndarray, v_bottom: float, width_share: float, place: float, colour: tuple[int, int, int],
-             aspect: float = 1.0) -> np.ndarray:
+def with_box(img: np.ndarray, v_bottom: float, width_share: float, place: float, colour: tuple[int, int, int]) -> np.ndarray:
     """A filled box standing on row v_bottom: width_share of the lane's width there, its centre at ``place`` (0 = the
-    lane's left line, 1 = its right line), ``aspect`` times as tall as it is wide."""
+    lane's left line, 1 = its right line), as tall as it is wide."""
     left, right = lane_columns(v_bottom)
     w = width_share * (right - left)
     u = left + place * (right - left)
     out = img.copy()
-    cv2.rectangle(out, (int(u - w / 2), int(v_bottom - aspect * w)), (int(u + w / 2), int(v_bottom)), colour, -1)
+    cv2.rectangle(out, (int(u - w / 2), int(v_bottom - w)), (int(u + w / 2), int(v_bottom)), colour, -1)
     return out
 
 
@@ -100,10 +100,9 @@ def dashed_road(grey: int, paint_px: int, seed: int, dashed_side: int) -> np.nda
         t0, t1 = (phase + 0.2 * k + 0.1) ** 2, (phase + 0.2 * k + 0.2) ** 2
         if t0 >= 1.0:
             break
-        for t_a, t_b in ((t0, min(t1, 1.0)),):
-            va, vb = v0 + t_a * 0.45 * H, v0 + t_b * 0.45 * H
-            ua, ub = lane_columns(va)[dashed_side], lane_columns(vb)[dashed_side]
-            cv2.line(img, (int(ua), int(va)), (int(ub), int(vb)), (grey, grey, grey), paint_px + 4)
+        va, vb = v0 + t0 * 0.45 * H, v0 + min(t1, 1.0) * 0.45 * H
+        ua, ub = lane_columns(va)[dashed_side], lane_columns(vb)[dashed_side]
+        cv2.line(img, (int(ua), int(va)), (int(ub), int(vb)), (grey, grey, grey), paint_px + 4)
     return img
 
 
@@ -117,7 +116,7 @@ def along_line(img: np.ndarray, side: int, v_top: float, v_bottom: float, half_p
     return out
 
 
-REGION_ROWS = (0.62 * H, 0.93 * H)  # the road region of a camera without a model (lanes.TOP_FRACTION, BOTTOM_FRACTION)
+REGION_ROWS = (TOP_FRACTION * H, BOTTOM_FRACTION * H)  # the road region of a camera without a model
 
 
 @settings(max_examples=25, deadline=None)
