@@ -652,7 +652,7 @@ def cmd_duckietown(args: argparse.Namespace) -> int:
             map_name=args.map, seconds=args.seconds, controller=args.baseline or "guarded", cruise_mps=args.cruise_mps,
             obstacle=args.obstacle, ahead_m=args.ahead, remove_after_s=args.remove_after, range_sensor=args.range,
             domain_rand=args.domain_rand, seed=args.seed, width_px=args.width, height_px=args.width * 3 // 4, rules=args.rules,
-            video=args.video, plots=not args.no_plots, mcap=args.mcap, route=args.route == "map",
+            video=args.video, plots=not args.no_plots, mcap=args.mcap, route=args.route == "map", lane=args.lane,
         )
     except ValueError as exc:
         raise FearguardError(f"duckietown: {exc}") from None
@@ -1027,6 +1027,9 @@ def build_parser() -> argparse.ArgumentParser:
     dt.add_argument("--rules", default=None, help="rule file (default: the bundled rules/duckiebot.toml)")
     dt.add_argument("--route", choices=("map", "none"), default="map",
                     help="map: the intersection navigation's way through junctions from the map (default); none: lanes only")
+    dt.add_argument("--lane", choices=("preset", "camera"), default="preset",
+                    help="preset: Duckietown's lane and paint (default); camera: what the camera alone knows (its height and "
+                         "pitch; the lane width measured from the picture), as a Duckiebot with its own camera.toml")
     dt.add_argument("--video", action="store_true", help=VIDEO_HELP)
     dt.add_argument("--mcap", action="store_true", help=MCAP_HELP)
     dt.add_argument("--no-plots", action="store_true", help="skip drive.png and timeline.png")

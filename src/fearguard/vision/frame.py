@@ -130,8 +130,9 @@ class FramePipeline:
 
     @property
     def ground(self) -> GroundLaneSpec | None:
-        """The road the bending ground-plane lane model is fitted for (None: straight image lines)."""
-        return self._ground
+        """The road the bending ground-plane lane model is fitted for (None: straight image lines), with the lane width
+        measured so far when the spec measures it."""
+        return self.trackers.ground.spec_now(self._ground) if self._ground is not None else None
 
     @property
     def aim_m(self) -> float | None:
@@ -448,6 +449,8 @@ def _analyze(
     t0 = clock()
     p = prepare(frame, camera)
     t1 = clock()
+    if ground is not None:
+        ground = trackers.ground.spec_now(ground)  # the lane width measured so far, when the spec measures it
     lanes = find_lanes(p, trackers, t_s, ground, aim_m)
     t2 = clock()
     seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box, speed_mps, path)

@@ -20,6 +20,7 @@ a few array operations over the projected points, and no library fits circles ro
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import NamedTuple
@@ -60,17 +61,45 @@ NEAR_WEIGHT_FAR = 0.1  # [-] an inlier at the far end of the fit range counts th
 EXTEND_M = 0.3  # [m] the model is followed this far beyond the last marking seen (the aim point may lie there)
 EXPECT_BEYOND_M = 0.1  # [m] occlusion expects a boundary this far beyond the last marking seen on it
 STEP_M = 0.01  # [m] spacing of the points sampled along a boundary
+CHOSEN_AT_HEIGHT_M = 0.108  # [m] the camera height at which the metric sizes above and the spec's defaults were chosen (a
+#   Duckiebot's): a camera mounted h high sees a world scaled by h / CHOSEN_AT_HEIGHT_M the same, so a spec for it scales them
+LANE_WIDTHS_PER_HEIGHT = 3.0  # [-] a lane is about this many camera heights wide, until one is measured: a road 3.5 m under
+#   a 1.3 m dash-cam 2.7; a 1:10 car's taped track 0.45 m under 0.15 m 3; Duckietown 0.236 m under 0.108 m 2.2
+WIDTH_FRAMES = 40  # [frames] a measured lane width is the median of the last this many frames that found both boundaries
+WIDTH_MIN_FRAMES = 5  # [frames] ... once there are this many
+WIDTH_RANGE = (0.5, 2.0)  # [-] of the assumed width: a two-sided fit measuring a width outside is no measurement of this lane
 
 
 @dataclass(frozen=True)
 class GroundLaneSpec:
-    """What the ground model must know of the road: its lane and paint in metres, and where to fit."""
+    """What the ground model must know of the road: its lane and paint in metres, and where to fit.
 
-    lane_width_m: float  # between the inner edges of the two boundary markings
+    ``for_camera`` gives the spec of a camera that knows only its mount (height and pitch): every length scaled by its
+    height, the lane width assumed (``LANE_WIDTHS_PER_HEIGHT``) until the picture measures it (``GroundMemory.spec_now``),
+    and which paint bounds which side read from the picture (``yellow_centre`` None)."""
+
+    lane_width_m: float  # between the inner edges of the two boundary markings (assumed, when ``width_measured``)
     near_m: float = 0.07  # fit range, from the camera's foot: the nearest ground the camera sees ...
     far_m: float = 0.5  # ... and the farthest where the projection is still precise
     aim_m: float = 0.25  # distance from the camera of the steering's pure-pursuit point on the lane centre
     max_bearing_deg: float = 75.0  # the aim's bearing is held within this: a lane centre further round at aim_m is no lane
+    scale: float = 1.0  # [-] the model's own metric sizes (tape width, bins, gates, curvature) × this
+    width_measured: bool = False  # the lane width is measured from the picture (lane_width_m: the assumption before that)
+    yellow_centre: bool | None = True  # the left boundary is a yellow centre line (Duckietown's, a US road's); None: the
+    #   picture says (a yellow boundary once found); white paint then bounds whichever side it lies on
+
+    @classmethod
+    def for_camera(cls, camera: CameraModel) -> GroundLaneSpec:
+        """The spec of a mounted camera (``mount_height_m`` set) without a lane spec: the defaults scaled by its height."""
+        h = float(camera.mount_height_m or CHOSEN_AT_HEIGHT_M)
+        s = h / CHOSEN_AT_HEIGHT_M
+        base = cls(lane_width_m=LANE_WIDTHS_PER_HEIGHT * h)
+        return cls(base.lane_width_m, near_m=base.near_m * s, far_m=base.far_m * s, aim_m=base.aim_m * s,
+                   max_bearing_deg=base.max_bearing_deg, scale=s, width_measured=True, yellow_centre=None)
+
+    def metres(self, m: float) -> float:
+        """A metric size of the model (chosen at CHOSEN_AT_HEIGHT_M) for this spec's scale."""
+        return m * self.scale
 
 
 @dataclass(frozen=True)
@@ -146,6 +175,8 @@ class GroundLanes:
     points: int  # marking points projected
     light_gains: tuple[float, float, float] | None = None  # (B, G, R) gains the paint's colour was judged under (paint_light)
     light_split: float | None = None  # the split between the paints in b that went with them (paint_light.Light.white_b_min)
+    width_m: float = math.nan  # [m] the lane width both boundaries measure (NaN: not both found)
+    yellow_left: bool = False  # the left boundary is yellow paint (as a prior: a yellow boundary was ever found)
 
 
 @dataclass(frozen=True)
@@ -257,23 +288,23 @@ STANDING_WIDTH_M = 0.04  # [m] ... and whose rows are this wide (median, read as
 #   (5 cm), a solid line 2.5 cm tape (wider only where it runs across the rows, over a short span)
 
 
-def flat_paint(yellow: np.ndarray, grid: GroundGrid, bottom_v_px: int) -> np.ndarray:
+def flat_paint(yellow: np.ndarray, grid: GroundGrid, bottom_v_px: int, scale: float = 1.0) -> np.ndarray:
     """The yellow mask without blobs that stand up. Paint is flat: read as flat ground, a marking's rows span its own
     length and its tape width. A yellow object standing in the lane (a toy duck) keeps its width in pixels while its
     upper rows, read as flat, lie far beyond its foot, where a pixel is more ground: it spans much ground and is wide.
     It is no centre line (it would become the left boundary, and the lane interior would pass it by): it is left to
-    the object search. Only the fit range's rows are judged."""
+    the object search. Only the fit range's rows are judged. ``scale``: ``GroundLaneSpec.scale`` (the sizes × this)."""
     band = yellow[grid.top_v_px : bottom_v_px + 1]
     n, labels, stats, _ = cv2.connectedComponentsWithStats(band, connectivity=8)
     out = yellow
     for i in range(1, n):
         left, top, width, height = (int(v) for v in stats[i, :4])
         foot = top + height - 1  # band row of its lowest pixel
-        if float(grid.x_m[top] - grid.x_m[foot]) <= STANDING_DEPTH_M:
+        if float(grid.x_m[top] - grid.x_m[foot]) <= STANDING_DEPTH_M * scale:
             continue
         mine = labels[top : foot + 1, left : left + width] == i
         widths = mine.sum(axis=1) * grid.lateral_m_per_px[top : foot + 1]
-        if float(median(widths)) >= STANDING_WIDTH_M:
+        if float(median(widths)) >= STANDING_WIDTH_M * scale:
             if out is yellow:
                 out = yellow.copy()
             out[grid.top_v_px + top : grid.top_v_px + foot + 1, left : left + width][mine] = 0
@@ -309,13 +340,15 @@ def inner_edges(paint: np.ndarray, lane_is_right: bool) -> np.ndarray:
 def ground_points(white: np.ndarray, yellow: np.ndarray, grid: GroundGrid, bottom_v_px: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(x, y, is_yellow) of the inner-edge pixels of the markings in the grid's rows: the yellow line's (a left
     boundary) and the white paint's (a right one)."""
-    band = slice(grid.top_v_px, bottom_v_px + 1)
-    ry, cy = np.nonzero(inner_edges(yellow[band], lane_is_right=True))
-    rw, cw = np.nonzero(inner_edges(white[band], lane_is_right=False))
-    r, c = np.concatenate([ry, rw]), np.concatenate([cy, cw])
-    x = grid.x_m[r]
-    y = -(c - grid.cx_px) * grid.lateral_m_per_px[r]
-    return x, y, np.arange(len(r)) < len(ry)
+    yx, yy = edge_points(yellow, grid, bottom_v_px, lane_is_right=True)
+    wx, wy = edge_points(white, grid, bottom_v_px, lane_is_right=False)
+    return np.concatenate([yx, wx]), np.concatenate([yy, wy]), np.arange(len(yx) + len(wx)) < len(yx)
+
+
+def edge_points(paint: np.ndarray, grid: GroundGrid, bottom_v_px: int, *, lane_is_right: bool) -> tuple[np.ndarray, np.ndarray]:
+    """(x, y) of the paint's edge pixels facing a lane on its right (a left boundary's) or on its left, in the grid's rows."""
+    r, c = np.nonzero(inner_edges(paint[grid.top_v_px : bottom_v_px + 1], lane_is_right=lane_is_right))
+    return grid.x_m[r], -(c - grid.cx_px) * grid.lateral_m_per_px[r]
 
 
 def _distance(v: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -364,7 +397,7 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
     where they start count (MAX_START_ANGLE_DEG): a tile seam or a stop line across the lane is no boundary, however
     many points it has. A prior (last frame's boundary) gates the points first."""
     if prior is not None:
-        near = np.abs(prior.distance(x, y)) <= GATE_M
+        near = np.abs(prior.distance(x, y)) <= spec.metres(GATE_M)
         x, y = x[near], y[near]
     if len(x) < MIN_POINTS:
         return None
@@ -379,22 +412,23 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
     m = np.stack([px * px + py * py, px, py, np.ones_like(px)], axis=2)  # (H, 3, 4): each hypothesis its null vector
     curves = _normalised(np.linalg.svd(m)[2][:, -1, :])
     first = np.argmin(px, axis=1)[:, None]  # each hypothesis' point nearest ahead
-    usable = np.isfinite(curves).all(axis=1) & (2.0 * np.abs(curves[:, 0]) <= MAX_CURVATURE)
+    inlier_m, max_curvature = spec.metres(INLIER_M), MAX_CURVATURE / spec.scale
+    usable = np.isfinite(curves).all(axis=1) & (2.0 * np.abs(curves[:, 0]) <= max_curvature)
     usable &= _runs_along(curves, np.take_along_axis(px, first, 1)[:, 0], np.take_along_axis(py, first, 1)[:, 0])
     curves = curves[usable]
     if len(curves) == 0:
         return None
     weight = np.clip((spec.far_m - r) / (spec.far_m - spec.aim_m), NEAR_WEIGHT_FAR, 1.0)  # near markings count more
-    counts = (np.abs(_distance(curves, x, y)) <= INLIER_M) @ weight
+    counts = (np.abs(_distance(curves, x, y)) <= inlier_m) @ weight
     best = curves[int(np.argmax(counts))]
-    inlier = np.abs(_distance(best, x, y)) <= INLIER_M
+    inlier = np.abs(_distance(best, x, y)) <= inlier_m
     if inlier.sum() < MIN_POINTS:
         return None
     # the least-squares refit on the inliers is the boundary (a 3-point hypothesis carries the noise of its points),
     # unless it loses the consensus the hypothesis found
     refit = _refit(x[inlier], y[inlier])
-    if refit is not None and 2.0 * abs(refit[0]) <= MAX_CURVATURE:
-        refined = np.abs(_distance(refit, x, y)) <= INLIER_M
+    if refit is not None and 2.0 * abs(refit[0]) <= max_curvature:
+        refined = np.abs(_distance(refit, x, y)) <= inlier_m
         if refined @ weight >= REFIT_KEEP * (inlier @ weight) and _starts_along(refit, x[refined], y[refined]):
             return _oriented(refit, x[refined], y[refined], spec)
     if not _starts_along(best, x[inlier], y[inlier]):
@@ -428,38 +462,76 @@ def _oriented(v: np.ndarray, x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec)
     gradient = np.array([2 * v[0] * mid[0] + v[1], 2 * v[0] * mid[1] + v[2]])
     if float(gradient @ left) < 0:
         v = -v
-    bins = max(1, math.ceil((spec.far_m - spec.near_m) / BIN_M))
-    covered = np.unique(np.clip(((r - spec.near_m) / BIN_M).astype(np.int64), 0, bins - 1))
+    bin_m = spec.metres(BIN_M)
+    bins = max(1, math.ceil((spec.far_m - spec.near_m) / bin_m))
+    covered = np.unique(np.clip(((r - spec.near_m) / bin_m).astype(np.int64), 0, bins - 1))
     support = min(1.0, len(covered) / bins / SUPPORT_FULL)
     return GroundBoundary(float(v[0]), float(v[1]), float(v[2]), float(v[3]), start, end, support, len(x))
 
 
 def detect_ground_lanes(
     white: np.ndarray, yellow: np.ndarray, grid: GroundGrid, bottom_v_px: int, spec: GroundLaneSpec,
-    priors: tuple[GroundBoundary | None, GroundBoundary | None] = (None, None),
+    priors: tuple[GroundBoundary | None, GroundBoundary | None] = (None, None), yellow_centre: bool = True,
 ) -> GroundLanes:
-    """Left (yellow) and right (white, right of the yellow line, or near the prior) boundaries of the ego lane."""
+    """Left (yellow) and right (white, right of the yellow line, or near the prior) boundaries of the ego lane. Without a
+    yellow boundary on a track not known to have a yellow centre line (``yellow_centre`` False), white paint bounds
+    whichever side it lies on (``_white_sides``)."""
     x, y, is_yellow = ground_points(white, yellow, grid, bottom_v_px)
     left = _beside(fit_boundary(x[is_yellow], y[is_yellow], spec, priors[0], seed=1), spec, left_side=True)
     if left is None and priors[0] is not None:
         left = _beside(fit_boundary(x[is_yellow], y[is_yellow], spec, None, seed=1), spec, left_side=True)
     wx, wy = x[~is_yellow], y[~is_yellow]
-    w = spec.lane_width_m
-    if left is not None:
-        gap = -left.distance(wx, wy)  # the ego lane's white edge lies about a lane width right of the yellow line
-        keep = (gap >= 0.5 * w) & (gap <= 1.6 * w)
-        wx, wy = wx[keep], wy[keep]
-    right = _beside(fit_boundary(wx, wy, spec, priors[1], seed=2), spec, left_side=False)
-    if right is None and priors[1] is not None:  # the prior lost the line (a jump): search afresh
-        right = _beside(fit_boundary(wx, wy, spec, None, seed=3), spec, left_side=False)
-    geometry = 1.0
+    yellow_path = left is not None or yellow_centre
+    if not yellow_path:  # white on both sides: a left boundary's points are the tape's edge facing right
+        left, right = _white_sides(edge_points(white, grid, bottom_v_px, lane_is_right=True), (wx, wy), spec, priors)
+    else:
+        if left is not None:
+            wx, wy = _across(left, wx, wy, spec, left_side=True)
+        right = _beside(fit_boundary(wx, wy, spec, priors[1], seed=2), spec, left_side=False)
+        if right is None and priors[1] is not None:  # the prior lost the line (a jump): search afresh
+            right = _beside(fit_boundary(wx, wy, spec, None, seed=3), spec, left_side=False)
+    geometry, width = 1.0, math.nan
     if left is not None and right is not None:
-        near = right.samples()[: max(2, int(0.25 / STEP_M))]
+        near = right.samples()[: max(2, int(spec.metres(0.25) / STEP_M))]
         width = float(np.mean(-left.distance(near[:, 0], near[:, 1])))
-        error = abs(width - w) / w
+        error = abs(width - spec.lane_width_m) / spec.lane_width_m
         lo, hi = WIDTH_TOLERANCE
         geometry = float(min(1.0, max(0.0, (hi - error) / (hi - lo))))
-    return GroundLanes(left, right, geometry, len(x))
+    return GroundLanes(left, right, geometry, len(x), width_m=width, yellow_left=left is not None and yellow_path)
+
+
+def _across(found: GroundBoundary, x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, *, left_side: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The points about a lane width across the lane from a found boundary (``left_side``: it is the left one): where
+    the other boundary lies (0.5 to 1.6 lane widths over)."""
+    w = spec.lane_width_m
+    gap = -found.distance(x, y) if left_side else found.distance(x, y)
+    keep = (gap >= 0.5 * w) & (gap <= 1.6 * w)
+    return x[keep], y[keep]
+
+
+def _white_sides(left_points: tuple[np.ndarray, np.ndarray], right_points: tuple[np.ndarray, np.ndarray], spec: GroundLaneSpec,
+                 priors: tuple[GroundBoundary | None, GroundBoundary | None]) -> tuple[GroundBoundary | None, GroundBoundary | None]:
+    """Both boundaries from one paint (white on both sides, a taped track), each from its tapes' edges facing the lane
+    (``left_points``, ``right_points``): each side near its prior first; a side still missing from the points a lane
+    width across from the other, or — the other not found either — from the points on its side of the camera's heading
+    (a fit over both tapes' points can join the near end of one to the far end of the other: a line across the lane)."""
+    sides: list[GroundBoundary | None] = [None, None]
+    points = (left_points, right_points)
+    for i, prior in enumerate(priors):
+        if prior is not None:
+            sides[i] = _beside(fit_boundary(*points[i], spec, prior, seed=2 + i), spec, left_side=i == 0)
+    for i in (0, 1):
+        if sides[i] is not None:
+            continue
+        x, y = points[i]
+        other = sides[1 - i]
+        if other is not None:
+            x, y = _across(other, x, y, spec, left_side=i == 1)
+        else:
+            mine = y > 0 if i == 0 else y < 0
+            x, y = x[mine], y[mine]
+        sides[i] = _beside(fit_boundary(x, y, spec, None, seed=4 + i), spec, left_side=i == 0)
+    return sides[0], sides[1]
 
 
 BESIDE_LANES = 1.5  # [-] of the lane width: a boundary farther than this from the camera (or on its wrong side by more
@@ -482,7 +554,7 @@ def aim_point(lanes: GroundLanes, spec: GroundLaneSpec) -> tuple[float, float] |
     for side, delta in ((lanes.left, -0.5 * spec.lane_width_m), (lanes.right, 0.5 * spec.lane_width_m)):
         centre = side.offset(delta) if side is not None else None
         if centre is not None:
-            points.append(_at_distance(centre.samples(EXTEND_M), spec.aim_m))
+            points.append(_at_distance(centre.samples(spec.metres(EXTEND_M)), spec.aim_m))
     if not points:
         return None
     x, y = np.mean(points, axis=0)
@@ -506,7 +578,7 @@ def agreement(now: GroundBoundary | None, before: GroundBoundary | None, spec: G
     """1 when a boundary lies on last frame's, 0 at AGREEMENT_M of a lane width apart (mean over its near 0.3 m)."""
     if now is None or before is None:
         return 1.0
-    near = now.samples()[: max(2, int(0.3 / STEP_M))]
+    near = now.samples()[: max(2, int(spec.metres(0.3) / STEP_M))]
     err = float(np.mean(np.abs(before.distance(near[:, 0], near[:, 1]))))
     return max(0.0, 1.0 - err / (AGREEMENT_M * spec.lane_width_m))
 
@@ -514,16 +586,31 @@ def agreement(now: GroundBoundary | None, before: GroundBoundary | None, spec: G
 class GroundMemory:
     """Last frame's boundaries, each kept as the prior (the gate of its points) until LOST_AFTER_S unseen (the image
     tracks' limit), and the light's last gains and the split between the paints that came with them (kept until a
-    frame measures new ones: the light's colour changes slowly, and a frame with one paint in view cannot measure it)."""
+    frame measures new ones: the light's colour changes slowly, and a frame with one paint in view cannot measure it).
+    For a spec that measures its lane (``width_measured``): the widths of the last WIDTH_FRAMES two-sided fits, and
+    whether a yellow boundary was ever found (the track then has a yellow centre line: ``GroundLaneSpec.yellow_centre``)."""
 
     def __init__(self) -> None:
         self._last: list[tuple[float, GroundBoundary] | None] = [None, None]
         self._gains: tuple[float, float, float] | None = None
         self._split: float | None = None
+        self._widths: deque[float] = deque(maxlen=WIDTH_FRAMES)
+        self._yellow = False
 
     def priors(self, t_s: float) -> GroundLanes | None:
         kept = [b if b is not None and t_s - b[0] <= LOST_AFTER_S else None for b in self._last]
-        return GroundLanes(kept[0][1] if kept[0] else None, kept[1][1] if kept[1] else None, 1.0, 0, self._gains, self._split)
+        return GroundLanes(kept[0][1] if kept[0] else None, kept[1][1] if kept[1] else None, 1.0, 0, self._gains, self._split,
+                           yellow_left=self._yellow)
+
+    def spec_now(self, spec: GroundLaneSpec) -> GroundLaneSpec:
+        """The spec with the lane width measured so far: the median of the remembered widths within WIDTH_RANGE of the
+        spec's assumed one, once there are WIDTH_MIN_FRAMES of them; a spec that knows its width, unchanged."""
+        if not spec.width_measured:
+            return spec
+        widths = np.array(self._widths)
+        lo, hi = WIDTH_RANGE
+        widths = widths[(widths >= lo * spec.lane_width_m) & (widths <= hi * spec.lane_width_m)]
+        return replace(spec, lane_width_m=float(median(widths))) if len(widths) >= WIDTH_MIN_FRAMES else spec
 
     def remember(self, t_s: float, lanes: GroundLanes) -> None:
         for i, b in enumerate((lanes.left, lanes.right)):
@@ -531,6 +618,9 @@ class GroundMemory:
                 self._last[i] = (t_s, b)
         if lanes.light_gains is not None:
             self._gains, self._split = lanes.light_gains, lanes.light_split
+        self._yellow |= lanes.yellow_left
+        if math.isfinite(lanes.width_m):
+            self._widths.append(lanes.width_m)
 
 
 @dataclass(frozen=True)
@@ -567,17 +657,18 @@ def ground_lanes_in_image(
     held = np.array(before.light_gains) if before.light_gains is not None else None
     white, yellow, gains, hls_white, split_b = marking_masks(
         hls, light, mask, region.top_v_px, region.bottom_v_px, bgr, held, before.light_split)
-    yellow = flat_paint(yellow, grid, region.bottom_v_px)
+    yellow = flat_paint(yellow, grid, region.bottom_v_px, spec.scale)
     features = cv2.bitwise_or(white, yellow)
-    lanes = detect_ground_lanes(white, yellow, grid, region.bottom_v_px, spec, (before.left, before.right))
+    centre = spec.yellow_centre if spec.yellow_centre is not None else before.yellow_left
+    lanes = detect_ground_lanes(white, yellow, grid, region.bottom_v_px, spec, (before.left, before.right), centre)
     if gains is not None:
         lanes = replace(lanes, light_gains=(float(gains[0]), float(gains[1]), float(gains[2])), light_split=split_b)
     band = slice(region.top_v_px, region.bottom_v_px + 1)
     integral = cv2.integral((features[band] > 0).view(np.uint8), sdepth=cv2.CV_64F)
-    left, right = (_image_chord(b, cam) for b in (lanes.left, lanes.right))
+    left, right = (_image_chord(b, cam, spec) for b in (lanes.left, lanes.right))
     agree = (agreement(lanes.left, before.left, spec), agreement(lanes.right, before.right, spec))
-    hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid),
-              lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid))
+    hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid, spec),
+              lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid, spec))
     curves = tuple(_image_polyline(b, cam, spec) for b in (lanes.left, lanes.right))
     edge_paint = white[band] > 0
     return GroundFit(lanes, left, right, agree, features, integral, hidden, expected_points(lanes, cam, region, spec),
@@ -588,7 +679,7 @@ def _image_polyline(boundary: GroundBoundary | None, camera: CameraModel, spec: 
     """The boundary where its markings were seen (and EXPECT_BEYOND_M beyond), within the fit range, in image pixels."""
     if boundary is None:
         return None
-    pts = boundary.samples(EXPECT_BEYOND_M)
+    pts = boundary.samples(spec.metres(EXPECT_BEYOND_M))
     pts = pts[np.hypot(pts[:, 0], pts[:, 1]) <= spec.far_m]
     u, v, ok = camera.project_ground(pts[:, 0], pts[:, 1])
     return np.stack([u[ok], v[ok]], axis=1) if ok.sum() >= 2 else None
@@ -606,7 +697,7 @@ def expected_points(
         curve = side if side is not None else (other.offset(delta) if other is not None else None)
         if curve is None:
             continue
-        pts = curve.samples(EXPECT_BEYOND_M)
+        pts = curve.samples(spec.metres(EXPECT_BEYOND_M))
         pts = pts[np.hypot(pts[:, 0], pts[:, 1]) <= spec.far_m]
         u, v, ok = camera.project_ground(pts[:, 0], pts[:, 1])
         keep = ok & (u >= 0) & (u < region.width_px) & (v >= region.top_v_px) & (v <= region.bottom_v_px)
@@ -633,7 +724,7 @@ def lane_interior(
     if left is None or right is None:
         return None
     seen = [b for b in (lanes.left, lanes.right) if b is not None]
-    reach = min(spec.far_m, max(math.hypot(*b.end) for b in seen) + EXPECT_BEYOND_M)
+    reach = min(spec.far_m, max(math.hypot(*b.end) for b in seen) + spec.metres(EXPECT_BEYOND_M))
     out = np.zeros((region.bottom_v_px - region.top_v_px + 1, region.width_px), bool)
     rows = np.flatnonzero(grid.x_m <= reach)  # grid rows (from grid.top_v_px) within reach ahead
     if len(rows) == 0:
@@ -667,22 +758,24 @@ def lane_interior(
 VISIBLE_SHARE = 0.25  # [-] a boundary with less than this share of its near 0.3 m inside the road region is out of view
 
 
-def _in_view(expected: GroundBoundary | None, camera: CameraModel, grid: GroundGrid) -> bool:
-    """Would the camera see this boundary (its near 0.3 m, as the lane model places it)?"""
+def _in_view(expected: GroundBoundary | None, camera: CameraModel, grid: GroundGrid, spec: GroundLaneSpec) -> bool:
+    """Would the camera see this boundary (its near 0.3 m at the spec's scale, as the lane model places it)?"""
     if expected is None:
         return True  # the model cannot place it: count it as missing
-    pts = expected.samples(0.3)[: int(0.3 / STEP_M)]
+    near_m = spec.metres(0.3)
+    pts = expected.samples(near_m)[: int(near_m / STEP_M)]
     u, v, ok = camera.project_ground(pts[:, 0], pts[:, 1])
     inside = ok & (u >= 0) & (u < camera.width_px) & (v >= grid.top_v_px) & (v < camera.height_px)
     return float(inside.mean()) >= VISIBLE_SHARE
 
 
-def _image_chord(boundary: GroundBoundary | None, camera: CameraModel) -> LaneLine | None:
-    """The straight image line through the boundary's nearest point and the one 0.15 m along it (or its end)."""
+def _image_chord(boundary: GroundBoundary | None, camera: CameraModel, spec: GroundLaneSpec) -> LaneLine | None:
+    """The straight image line through the boundary's nearest point and the one 0.15 m along it (at the spec's scale; or
+    its end)."""
     if boundary is None:
         return None
     pts = boundary.samples()
-    ends = pts[[0, min(len(pts) - 1, int(0.15 / STEP_M))]]
+    ends = pts[[0, min(len(pts) - 1, int(spec.metres(0.15) / STEP_M))]]
     u, v, ok = camera.project_ground(ends[:, 0], ends[:, 1])
     if not ok.all() or abs(v[0] - v[1]) < 1e-6:
         return None

@@ -17,7 +17,7 @@ from typing import Protocol
 import numpy as np
 
 from fearguard.observation import LeadBox
-from fearguard.vision.ground_lanes import GroundLanes, GroundMemory
+from fearguard.vision.ground_lanes import GroundLanes, GroundLaneSpec, GroundMemory
 from fearguard.vision.lane_tracker import LaneTracker, TrackedLanes
 from fearguard.vision.lanes import LaneLine, RoadRegion
 from fearguard.vision.lead import LeadTracker
@@ -65,6 +65,8 @@ class GroundTracking(Protocol):
     def priors(self, t_s: float) -> GroundLanes | None: ...
 
     def remember(self, t_s: float, lanes: GroundLanes) -> None: ...
+
+    def spec_now(self, spec: GroundLaneSpec) -> GroundLaneSpec: ...
 
 
 class ConfidenceSmoothing(Protocol):
@@ -139,6 +141,9 @@ class PassThroughGround:
 
     def remember(self, t_s: float, lanes: GroundLanes) -> None:
         return None
+
+    def spec_now(self, spec: GroundLaneSpec) -> GroundLaneSpec:
+        return spec
 
 
 class PassThroughRoad:

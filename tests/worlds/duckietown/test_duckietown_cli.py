@@ -25,3 +25,14 @@ def test_bad_numbers_are_usage_errors(capsys: pytest.CaptureFixture[str], tmp_pa
 def test_without_the_simulator_the_error_says_how_to_install_it(capsys: pytest.CaptureFixture[str], tmp_path) -> None:
     assert main(["duckietown", "loop_empty", "--out", str(tmp_path), "--seconds", "1"]) == 2
     assert ".ci/duckietown.sh" in capsys.readouterr().err
+
+
+def test_an_unknown_lane_model_is_a_usage_error(capsys: pytest.CaptureFixture[str], tmp_path) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["duckietown", "loop_empty", "--out", str(tmp_path), "--lane", "spec"])
+    assert exc.value.code == 2
+    assert "argument --lane: invalid choice: 'spec'" in capsys.readouterr().err
+    from fearguard.worlds.duckietown.drive import DriveOptions
+
+    with pytest.raises(ValueError, match="lane model 'spec': choose one of preset, camera"):
+        DriveOptions(lane="spec")

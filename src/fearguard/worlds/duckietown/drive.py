@@ -31,6 +31,7 @@ from fearguard.fuzzy.loader import bundled_rules_path, load_rules
 from fearguard.outputs.recorder import Recorder
 from fearguard.outputs.report import json_value
 from fearguard.supervisor import Command, FearGuard, Observation
+from fearguard.vision.ground_lanes import GroundLaneSpec
 from fearguard.vision.lane_steering import HoughLaneSteering
 from fearguard.vision.navigated import NavigatedSteering
 from fearguard.worlds.duckietown.metrics import STOPPED_SPEED_MPS, Sample, route_completion, summarize_drive
@@ -47,6 +48,7 @@ from fearguard.worlds.duckietown.world import DuckietownWorld, Truth
 CONTROLLERS = ("guarded", "unguarded", "expert")
 OBSTACLES = ("duck", "cone", "duckiebot")
 RANGE_SENSORS = ("none", "tof")
+LANE_MODELS = ("preset", "camera")
 EXPERT_LOOKAHEAD_M = 0.25  # [m] the simulator's own pure-pursuit teacher follows the lane centre this far ahead
 RULES_FILE = "duckiebot.toml"
 
@@ -73,6 +75,8 @@ class DriveOptions:
     plots: bool = True
     mcap: bool = False  # run.mcap for Foxglove (outputs/mcap.py)
     route: bool = True  # the intersection navigation's route through junctions (world.route_bearing_deg), as MetaDrive's
+    lane: str = "preset"  # the lane model: "preset" (duckietown_lane(): Duckietown's lane and paint) or "camera" (what a
+    #   camera alone knows, GroundLaneSpec.for_camera: sizes scaled by its height, the lane width measured from the picture)
 
     def __post_init__(self) -> None:
         if self.controller not in CONTROLLERS:
@@ -81,6 +85,8 @@ class DriveOptions:
             raise ValueError(f"obstacle {self.obstacle!r}: choose one of {', '.join(OBSTACLES)}")
         if self.range_sensor not in RANGE_SENSORS:
             raise ValueError(f"range sensor {self.range_sensor!r}: choose one of {', '.join(RANGE_SENSORS)}")
+        if self.lane not in LANE_MODELS:
+            raise ValueError(f"lane model {self.lane!r}: choose one of {', '.join(LANE_MODELS)}")
         for name in ("seconds", "cruise_mps", "ahead_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
@@ -184,7 +190,7 @@ def drive(options: DriveOptions, out_dir: str | Path | None = None,
     world = DuckietownWorld(o.map_name, width_px=o.width_px, height_px=o.height_px, seed=o.seed, domain_rand=o.domain_rand,
                             start_tile=o.start_tile, render=o.controller != "expert" or o.video)
     camera = duckiebot_camera(o.width_px, o.height_px)
-    lane = duckietown_lane()
+    lane = duckietown_lane() if o.lane == "preset" else GroundLaneSpec.for_camera(camera)
     limits = duckiebot_limits(time_of_flight=o.range_sensor == "tof")
     camera_lanes = HoughLaneSteering(camera=camera, fps=FRAME_RATE_HZ, ground=lane)
     rules = load_rules(o.rules if o.rules is not None else bundled_rules_path(RULES_FILE))
