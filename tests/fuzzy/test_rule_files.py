@@ -2,15 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from tests.conftest import RULES_DIR
 
 import fearguard as fg
+from fearguard.cues import calm_values
 from fearguard.fuzzy.loader import bundled_rules_path
 from fearguard.fuzzy.rule_text import RuleSyntaxError, parse_rule
 
@@ -158,3 +162,15 @@ def test_the_default_file_spells_out_every_policy_number() -> None:
     assert fg.load_rules(RULES_DIR / "default.toml").policy == PolicyConfig()  # the file says what the code defaults to
     for key in PolicyConfig.__dataclass_fields__:
         assert re.search(rf"^{key} = ", text, flags=re.M), f"default.toml [policy] does not show {key}"
+
+
+@given(occlusion=st.floats(0.3, 1.0))
+@settings(max_examples=60, deadline=None)
+def test_a_third_of_the_markings_hidden_raises_fear_by_a_fifth_on_every_shipped_file(occlusion: float) -> None:
+    """Issue 33's occluder bar, as a property of the rule files: with the other cues calm, occlusion ≥ 0.3 (a box over a
+    line, an object in the lane) gives fear at least 0.2 above calm — no plateau at LOW between partial and heavy."""
+    for path in sorted(RULES_DIR.glob("*.toml")):
+        rb = fg.load_rules(path)
+        calm = fg.Cues(*calm_values(rb.brightness_band))
+        hidden = rb.evaluate(dataclasses.replace(calm, occlusion=occlusion)).fear
+        assert hidden >= rb.evaluate(calm).fear + 0.2, (path.name, occlusion)
