@@ -37,6 +37,7 @@ from fearguard.policy import (
     emergency_plan,
     fear_speed_mps,
     imminent_collision,
+    lane_in_sight,
     lane_reacquired,
     lateral_speed_mps,
     lead_speed_mps,
@@ -421,15 +422,16 @@ class FearGuard:
         road_stop = recovery_eligible(st.mode, active, lead, imminent)
         confidence = finite_reading(cues.lane_confidence)
         seen = confidence is not None and confidence >= cfg.recovery_min_confidence  # a lane this faint steers nothing
+        st.recovery, in_sight = lane_in_sight(st.recovery, t, seen)  # a flicker of the lane is no blind stretch
         # a boundary found frame after frame steers a creep even when the picture as a whole is not trusted (glare)
         guided = perceived is not None and perceived.lane_guide >= cfg.recovery_min_guide
         routed = route_deg is not None and cfg.route_blind_m > 0.0 and st.routed_m < cfg.route_blind_m  # its budget shared
         st.recovery, creep = next_recovery(st.recovery, road_stop and not unclear, t, dt, speed_now, cfg,
-                                           blind=not (seen or routed), guided=guided, routed=routed)
+                                           blind=not (in_sight or routed), guided=guided, routed=routed)
         seen = seen or lane_reacquired(st.recovery, t, cfg)  # the re-acquired lane steers the creep and is no blind stretch
         plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t,
                               route_cap if routed else None)
-        status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=not (seen or routed))
+        status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=not (in_sight or routed))
         # a route is the known way across a junction, where the lane seen now may be the crossing road's
         lane_now = perceived.lane_steering_deg if perceived is not None and seen and not routed else None
         estimator = route_deg if routed else None if st.estimator_distrusted else steering

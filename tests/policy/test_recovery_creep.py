@@ -5,8 +5,16 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fearguard.policy import PolicyConfig, Recovery, lane_reacquired, next_recovery, recovery_exhausted, recovery_status
-from fearguard.policy.emergency import GUIDE_GAP_S
+from fearguard.policy import (
+    PolicyConfig,
+    Recovery,
+    lane_in_sight,
+    lane_reacquired,
+    next_recovery,
+    recovery_exhausted,
+    recovery_status,
+)
+from fearguard.policy.emergency import GUIDE_GAP_S, SIGHT_GAP_S
 
 CFG = PolicyConfig()
 
@@ -174,3 +182,11 @@ def test_property_between_guided_frames_the_budget_bounds_every_creep(frames) ->
         assert starts <= CFG.recovery_max_creeps
         assert unguided <= CFG.recovery_max_total_m + 2.0 * 0.4 + 1e-9
         assert blind_run <= CFG.recovery_blind_m + 2.0 * 0.4 + 1e-9
+
+
+@given(st.one_of(st.none(), st.floats(0.0, 10.0)), st.floats(0.0, 10.0), st.booleans())
+def test_the_lane_is_in_sight_when_seen_now_or_within_the_sight_gap(last: float | None, t: float, seen: bool) -> None:
+    rec, in_sight = lane_in_sight(Recovery(seen_last_s=last), t, seen)
+    recent = last is not None and 0.0 <= t - last <= SIGHT_GAP_S + 1e-9
+    assert in_sight == (seen or recent)
+    assert rec.seen_last_s == (t if seen else last)  # a frame that sees the lane is remembered, one that does not changes nothing

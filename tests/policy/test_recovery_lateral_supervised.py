@@ -179,3 +179,30 @@ def test_steering_deadline_is_validated_and_interrupts_propagate() -> None:
     with pytest.raises(KeyboardInterrupt):
         guard.step(fg.Observation(t_s=0.0, cues=CALM))
     assert dataclasses.is_dataclass(fg.Observation)
+
+
+def _after_the_blind_budget(lane_every: int) -> list:
+    """The picture lost with nothing of the lane in sight until the blind budget is spent and the car stands, then the lane
+    (still not trusted: markings hidden) read on every ``lane_every``-th frame at 20 Hz, the range clear throughout."""
+    blind_phase = [(0.05, CALM, True)] * 20 + [(0.05, BLIND, True)] * 200
+    flicker = [(0.05, LOST if k % lane_every == 0 else BLIND, True) for k in range(120)]
+    return obey(guarded(), blind_phase + flicker)[len(blind_phase):]
+
+
+def test_a_lane_read_on_every_other_frame_is_in_sight_and_the_creep_goes_on() -> None:
+    """Issue 35 (sparse dashes in a bend, the car standing after its blind metres): one dash read on alternate frames is
+    not "nothing of the lane in sight" (``SIGHT_GAP_S``), so the standstill's analysis is not restarted by every frame
+    that misses it: the car creeps again, steered by what it reads."""
+    standing = obey(guarded(), [(0.05, CALM, True)] * 20 + [(0.05, BLIND, True)] * 200)[-1][5]
+    assert standing.speed_limit_mps == 0.0 and any("nothing of the lane in sight" in x for x in standing.reasons)
+    rows = _after_the_blind_budget(lane_every=2)
+    creeping = [r for r in rows if any(CREEP in x for x in r[5].reasons)]
+    assert creeping and all(r[5].strategy is fg.Strategy.CRAWL for r in creeping)
+    first = next(k for k, r in enumerate(rows) if r in creeping)
+    assert rows[first][0] - rows[0][0] <= CFG.recovery_dwell_s + 0.5  # within the dwell (and the standstill before it)
+
+
+def test_a_lane_read_once_a_second_is_out_of_sight_and_the_car_stays_stopped() -> None:
+    rows = _after_the_blind_budget(lane_every=20)
+    assert not any(CREEP in x for r in rows for x in r[5].reasons)
+    assert rows[-1][5].speed_limit_mps == 0.0

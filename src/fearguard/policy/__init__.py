@@ -27,6 +27,7 @@ from fearguard.policy.emergency import (
     creep_clearance,
     creep_needs_m,
     emergency_plan,
+    lane_in_sight,
     lane_reacquired,
     next_recovery,
     recovery_eligible,
@@ -52,10 +53,10 @@ from fearguard.policy.speed import (
 )
 
 __all__ = [
-    "CAUSE_WORDS", "CLOSING_WINDOW_S", "ENVELOPE_SHRINK", "MODE_ORDER", "STRATEGY_ORDER", "TIME_EPS_S", "EmergencyPlan", "Latch",
-    "Lead", "Mode", "ModeState", "PolicyConfig", "Recovery", "Strategy", "active_causes", "closing_speed_from_ranges",
-    "creep_clearance", "creep_needs_m", "emergency_plan", "envelope_speed_mps", "fear_speed_mps", "imminent_collision",
-    "lane_reacquired", "lateral_speed_mps", "lead_speed_mps", "next_mode", "next_recovery", "oscillating", "rate_limited_mps",
-    "rate_limited_steering_deg", "recovery_eligible", "recovery_exhausted", "recovery_status", "same_object_after_gap",
-    "stopping_distance_m", "watchdog_s",
+    "CAUSE_WORDS", "CLOSING_WINDOW_S", "ENVELOPE_SHRINK", "MODE_ORDER", "STRATEGY_ORDER", "TIME_EPS_S", "EmergencyPlan",
+    "Latch", "Lead", "Mode", "ModeState", "PolicyConfig", "Recovery", "Strategy", "active_causes",
+    "closing_speed_from_ranges", "creep_clearance", "creep_needs_m", "emergency_plan", "envelope_speed_mps",
+    "fear_speed_mps", "imminent_collision", "lane_in_sight", "lane_reacquired", "lateral_speed_mps", "lead_speed_mps",
+    "next_mode", "next_recovery", "oscillating", "rate_limited_mps", "rate_limited_steering_deg", "recovery_eligible",
+    "recovery_exhausted", "recovery_status", "same_object_after_gap", "stopping_distance_m", "watchdog_s",
 ]

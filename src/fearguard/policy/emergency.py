@@ -109,6 +109,9 @@ def emergency_plan(
 
 
 # -- recovery: analyse, then act ------------------------------------------------------------------
+SIGHT_GAP_S = 0.5  # [s] the lane seen this recently is still in sight: a dash passing in and out of view, a line read on
+#   alternate frames (sparse dashes in a bend, at standstill: gaps of 0.05-0.35 s) is no "nothing of the lane in sight";
+#   at creep speed (0.3 m/s on a model car) the car has gone 15 cm since, half the blind budget's premise
 GUIDE_GAP_S = 0.1  # [s] a boundary missed this long (a frame or two at 20 Hz: glare leaves a line at support 0.25-0.4, and
 #   some frames miss it) does not end a spell of frames that found it; a shadow's edge found here and there is no spell
 
@@ -126,6 +129,16 @@ class Recovery:
     guided_since_s: float | None = None  # a boundary found in the frames since, gaps of at most GUIDE_GAP_S (None: no such spell)
     guided_last_s: float | None = None  # the last frame that found one
     guided_m: float = 0.0  # distance crept steered by the lane re-acquired, in this EMERGENCY (reported, not bounded)
+    seen_last_s: float | None = None  # the last frame of this EMERGENCY that saw the lane (``lane_in_sight``)
+
+
+def lane_in_sight(rec: Recovery, t_s: float, seen: bool) -> tuple[Recovery, bool]:
+    """Remember a frame that saw the lane; whether the lane is in sight: seen now or within SIGHT_GAP_S. A creep with
+    the lane out of sight is blind (``recovery_blind_m``): a picture that shows the lane on every other frame is not."""
+    if seen:
+        return replace(rec, seen_last_s=t_s), True
+    last = rec.seen_last_s
+    return rec, last is not None and 0.0 <= t_s - last <= SIGHT_GAP_S + TIME_EPS_S
 
 
 def recovery_eligible(state: ModeState, active: frozenset[Cause], lead: Lead | None, imminent: bool) -> bool:
