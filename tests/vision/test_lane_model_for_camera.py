@@ -168,3 +168,14 @@ def test_any_picture_through_any_mounted_camera_is_read_without_raising(height_m
     assert pipe.ground is not None
     lo, hi = WIDTH_RANGE
     assert lo * spec.lane_width_m <= pipe.ground.lane_width_m <= hi * spec.lane_width_m
+
+
+def test_a_yellow_line_seen_in_a_frame_or_two_does_not_make_a_white_track_yellow_centred() -> None:
+    """A yellow thing read as a left boundary for two frames (a yellow cone along the tape, a patch of warm light) is
+    no yellow centre line: the white tape on the left still bounds the lane afterwards."""
+    cam = camera_at(HEIGHT_M)
+    pipe = FramePipeline(cam, 30.0, ground=GroundLaneSpec.for_camera(cam))
+    drive_over(pipe, [floor(cam, 0.236, left=WHITE, seed=k) for k in range(4)]
+               + [floor(cam, 0.236, left=YELLOW, seed=k) for k in range(2)])
+    g = drive_over(pipe, [floor(cam, 0.236, left=None, extra_left_m=0.26, seed=9)]).ground
+    assert g is not None and g.left is not None

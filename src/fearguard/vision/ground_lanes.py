@@ -67,6 +67,8 @@ LANE_WIDTHS_PER_HEIGHT = 3.0  # [-] a lane is about this many camera heights wid
 #   a 1.3 m dash-cam 2.7; a 1:10 car's taped track 0.45 m under 0.15 m 3; Duckietown 0.236 m under 0.108 m 2.2
 WIDTH_FRAMES = 40  # [frames] a measured lane width is the median of the last this many frames that found both boundaries
 WIDTH_MIN_FRAMES = 5  # [frames] ... once there are this many
+YELLOW_TRACK_FRAMES = 5  # [frames] a yellow left boundary found in this many frames makes the track one with a yellow centre
+#   line (a yellow object read as one in a frame or two does not)
 WIDTH_RANGE = (0.5, 2.0)  # [-] of the assumed width: a two-sided fit measuring a width outside is no measurement of this lane
 
 
@@ -86,7 +88,7 @@ class GroundLaneSpec:
     scale: float = 1.0  # [-] the model's own metric sizes (tape width, bins, gates, curvature) × this
     width_measured: bool = False  # the lane width is measured from the picture (lane_width_m: the assumption before that)
     yellow_centre: bool | None = True  # the left boundary is a yellow centre line (Duckietown's, a US road's); None: the
-    #   picture says (a yellow boundary once found); white paint then bounds whichever side it lies on
+    #   picture says (a yellow boundary found in YELLOW_TRACK_FRAMES frames); until then white bounds either side
 
     @classmethod
     def for_camera(cls, camera: CameraModel) -> GroundLaneSpec:
@@ -176,7 +178,7 @@ class GroundLanes:
     light_gains: tuple[float, float, float] | None = None  # (B, G, R) gains the paint's colour was judged under (paint_light)
     light_split: float | None = None  # the split between the paints in b that went with them (paint_light.Light.white_b_min)
     width_m: float = math.nan  # [m] the lane width both boundaries measure (NaN: not both found)
-    yellow_left: bool = False  # the left boundary is yellow paint (as a prior: a yellow boundary was ever found)
+    yellow_left: bool = False  # the left boundary is yellow paint (as a prior: the track has a yellow centre line)
 
 
 @dataclass(frozen=True)
@@ -588,19 +590,20 @@ class GroundMemory:
     tracks' limit), and the light's last gains and the split between the paints that came with them (kept until a
     frame measures new ones: the light's colour changes slowly, and a frame with one paint in view cannot measure it).
     For a spec that measures its lane (``width_measured``): the widths of the last WIDTH_FRAMES two-sided fits, and
-    whether a yellow boundary was ever found (the track then has a yellow centre line: ``GroundLaneSpec.yellow_centre``)."""
+    how many frames found a yellow left boundary (from YELLOW_TRACK_FRAMES on, the track has a yellow centre line:
+    ``GroundLaneSpec.yellow_centre``)."""
 
     def __init__(self) -> None:
         self._last: list[tuple[float, GroundBoundary] | None] = [None, None]
         self._gains: tuple[float, float, float] | None = None
         self._split: float | None = None
         self._widths: deque[float] = deque(maxlen=WIDTH_FRAMES)
-        self._yellow = False
+        self._yellow_frames = 0
 
     def priors(self, t_s: float) -> GroundLanes | None:
         kept = [b if b is not None and t_s - b[0] <= LOST_AFTER_S else None for b in self._last]
         return GroundLanes(kept[0][1] if kept[0] else None, kept[1][1] if kept[1] else None, 1.0, 0, self._gains, self._split,
-                           yellow_left=self._yellow)
+                           yellow_left=self._yellow_frames >= YELLOW_TRACK_FRAMES)
 
     def spec_now(self, spec: GroundLaneSpec) -> GroundLaneSpec:
         """The spec with the lane width measured so far: the median of the remembered widths within WIDTH_RANGE of the
@@ -618,7 +621,7 @@ class GroundMemory:
                 self._last[i] = (t_s, b)
         if lanes.light_gains is not None:
             self._gains, self._split = lanes.light_gains, lanes.light_split
-        self._yellow |= lanes.yellow_left
+        self._yellow_frames += lanes.yellow_left
         if math.isfinite(lanes.width_m):
             self._widths.append(lanes.width_m)
 
