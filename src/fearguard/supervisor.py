@@ -426,12 +426,13 @@ class FearGuard:
         # a boundary found frame after frame steers a creep even when the picture as a whole is not trusted (glare)
         guided = perceived is not None and perceived.lane_guide >= cfg.recovery_min_guide
         routed = route_deg is not None and cfg.route_blind_m > 0.0 and st.routed_m < cfg.route_blind_m  # its budget shared
+        blind = not (in_sight or routed)
         st.recovery, creep = next_recovery(st.recovery, road_stop and not unclear, t, dt, speed_now, cfg,
-                                           blind=not (in_sight or routed), guided=guided, routed=routed)
+                                           blind=blind, guided=guided, routed=routed)
         seen = seen or lane_reacquired(st.recovery, t, cfg)  # the re-acquired lane steers the creep and is no blind stretch
         plan = emergency_plan(result.cause_fears, st.mode, lead, st.trusted_steering_deg, cfg, v, creep, t,
                               route_cap if routed else None)
-        status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=not (in_sight or routed))
+        status = "" if creep else recovery_status(st.recovery, road_stop, cfg, t, unclear, blind=blind)
         # a route is the known way across a junction, where the lane seen now may be the crossing road's
         lane_now = perceived.lane_steering_deg if perceived is not None and seen and not routed else None
         estimator = route_deg if routed else None if st.estimator_distrusted else steering

@@ -96,8 +96,8 @@ class GroundLaneSpec:
         h = float(camera.mount_height_m or CHOSEN_AT_HEIGHT_M)
         s = h / CHOSEN_AT_HEIGHT_M
         base = cls(lane_width_m=LANE_WIDTHS_PER_HEIGHT * h)
-        return cls(base.lane_width_m, near_m=base.near_m * s, far_m=base.far_m * s, aim_m=base.aim_m * s,
-                   max_bearing_deg=base.max_bearing_deg, scale=s, width_measured=True, yellow_centre=None)
+        return replace(base, near_m=base.near_m * s, far_m=base.far_m * s, aim_m=base.aim_m * s, scale=s,
+                       width_measured=True, yellow_centre=None)
 
     def metres(self, m: float) -> float:
         """A metric size of the model (chosen at CHOSEN_AT_HEIGHT_M) for this spec's scale."""
