@@ -1,16 +1,16 @@
 """Temporal tracking of the two lane boundaries with filterpy Kalman filters.
 
-Each boundary is tracked as its image column at the road region's top and bottom rows, with a
-constant-velocity model (state: u_top, u_bottom and their rates, px and px/s). A detection far from
-the prediction (Mahalanobis gate) is treated as a miss, unless it persists — ``REINIT_AFTER`` outliers
-in a row, each within ``REINIT_AGREE`` of the one before — which re-initialises the track there (the lane
-really moved, e.g. a lane change). Outliers scattered over the image (a shadow edge one frame, a far dash
-the next) are noise and never move a track. A track without detections is predicted for ``LOST_AFTER_S`` and
-then dropped. A detection measures the boundary only where its marking ridges were found (``seen_span``): a straight
-line through the dashes of a curved line in view is right at them and wrong where it is extrapolated to, so it is
-gated and folded in at two rows within that span, not at the region's ends — while the track is fresh (a line with a
-direction of its own on it within ``SUPPORT_HOLD_S``); a track that has coasted longer, its gate widened, is taken up
-again only by a line that agrees with it at the region's ends.
+Each boundary is tracked as its image column at the road region's top and bottom rows, with a constant-velocity model
+(state: u_top, u_bottom and their rates, px and px/s). A detection far from the prediction (Mahalanobis gate) is
+treated as a miss, unless it persists — ``REINIT_AFTER`` outliers in a row, each within ``REINIT_AGREE`` of the one
+before and none much weaker than the track's recent best (``REINIT_SUPPORT_SHARE``) — which re-initialises the track
+there (the lane really moved, e.g. a lane change). Outliers scattered over the image (a shadow edge one frame, a far
+dash the next) are noise and never move a track. A track without detections is predicted for ``LOST_AFTER_S`` and then
+dropped. A detection measures the boundary only where its marking ridges were found (``seen_span``): a straight line
+through the dashes of a curved line in view is right at them and wrong where it is extrapolated to, so it is gated and
+folded in at two rows within that span, not at the region's ends — while the track is fresh (a line with a direction
+of its own on it within ``SUPPORT_HOLD_S``); a track that has coasted longer, its gate widened, is taken up again only
+by a line that agrees with it at the region's ends.
 
 A dashed line shows a dash or two at a time: its support (the share of rows with paint) rises and falls as the dashes
 pass. An accepted detection's support is therefore the best its track had over the last ``SUPPORT_HOLD_S`` (one dash
@@ -46,6 +46,9 @@ REINIT_AGREE = 0.04  # [-] of the width: ... each end point this close to the pr
 OWN_DIRECTION_SPAN = 0.1  # [-] of the region's rows: ... each with a direction of its own, seen over this span at least
 #   (``seen_span``): a line through one short dash rests on a few rows, and a track begun on it disagrees with the whole
 #   line at once (a far dash of a curved model-car line, seen for three frames, re-initialised the track 45 px off)
+REINIT_SUPPORT_SHARE = 0.5  # [-] ... and each with at least this share of the best support the track held (SUPPORT_HOLD_S): a
+#   weaker line (the grass edge beside a dashed line in a bend, support 0.15 against the dashes' 0.63) does not replace a
+#   line seen well half a second ago
 LOST_AFTER_S = 1.0  # [s] a track without any detection for this long is dropped
 SUPPORT_HOLD_S = 0.6  # [s] an accepted detection's support is the best of the track's accepted detections this recent: one
 #   period of a dashed line's pattern passing the camera (a model car's 0.15 m dashes, 0.6 m gaps at 1.3 m/s: 0.58 s; a
@@ -100,7 +103,7 @@ class BoundaryTrack:
         self.kf.F, self.kf.Q = self._F, self._Q
         self.kf.predict()
 
-    def update(self, t_s: float, z: np.ndarray | None, h: np.ndarray | None = None, span: float = 1.0) -> bool:
+    def update(self, t_s: float, z: np.ndarray | None, h: np.ndarray | None = None, span: float = 1.0, support: float = 1.0) -> bool:
         """Fold in a detection or a miss; True if the detection was accepted. ``z``: the detection's columns (u_top,
         u_bottom) at the region's ends, or — with ``h`` (2×2: each row the weights of u_top and u_bottom at one image
         row) — at two rows where it was seen (``seen_span``); ``span``: the share of the region's rows those two span.
@@ -126,7 +129,8 @@ class BoundaryTrack:
         y = z - h2 @ self.kf.x[:2]
         s = h2 @ self.kf.P[:2, :2] @ h2.T + self.kf.R
         if _mahalanobis2(y, s) > GATE_CHI2:
-            ends = _ends(z, h) if own_direction else None  # a speck cannot move the track
+            weaker = support < REINIT_SUPPORT_SHARE * self.best_recent(t_s)
+            ends = _ends(z, h) if own_direction and not weaker else None  # a speck, or a weaker line, cannot move the track
             persists = (ends is not None and self.pending is not None
                         and float(np.max(np.abs(ends - self.pending))) <= REINIT_AGREE * self.width_px)
             self.outliers, self.pending = (self.outliers + 1 if persists else 1), ends
@@ -140,6 +144,10 @@ class BoundaryTrack:
             self.last_seen_s = t_s
         self.outliers, self.pending = 0, None
         return True
+
+    def best_recent(self, t_s: float) -> float:
+        """The best support of the track's accepted detections within SUPPORT_HOLD_S before t_s (0: none)."""
+        return max((s for t, s in self.recent if t >= t_s - SUPPORT_HOLD_S - 1e-9), default=0.0)
 
     def held_support(self, t_s: float, support: float) -> float:
         """The support of a detection accepted at t_s: the best of the track's accepted detections within SUPPORT_HOLD_S
@@ -241,7 +249,7 @@ class LaneTracker:
             track.predict(dt)
             predicted.append(track.line(region))
             z, h, span = (None, None, 0.0) if line is None else seen_span(line, region)
-            ok = track.update(self._last_t_s, z, h, span)
+            ok = track.update(self._last_t_s, z, h, span, 0.0 if line is None else line.support)
             accepted.append(ok)
             held.append(track.held_support(self._last_t_s, line.support) if ok and line is not None else 0.0)
         if accepted[0] and accepted[1] and left is not None and right is not None:
