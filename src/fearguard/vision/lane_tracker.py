@@ -146,17 +146,18 @@ class BoundaryTrack:
         return True
 
     def best_recent(self, t_s: float) -> float:
-        """The best support of the track's accepted detections within SUPPORT_HOLD_S before t_s (0: none)."""
-        return max((s for t, s in self.recent if t >= t_s - SUPPORT_HOLD_S - 1e-9), default=0.0)
+        """The best support of the track's accepted detections within SUPPORT_HOLD_S before t_s (0: none); older ones are
+        forgotten."""
+        recent = self.recent
+        while recent and recent[0][0] < t_s - SUPPORT_HOLD_S - 1e-9:  # a frame exactly SUPPORT_HOLD_S old still counts
+            recent.popleft()
+        return max((s for _, s in recent), default=0.0)
 
     def held_support(self, t_s: float, support: float) -> float:
         """The support of a detection accepted at t_s: the best of the track's accepted detections within SUPPORT_HOLD_S
         (this one included). A new track holds nothing from before it."""
-        recent = self.recent
-        while recent and recent[0][0] < t_s - SUPPORT_HOLD_S - 1e-9:  # a frame exactly SUPPORT_HOLD_S old still counts
-            recent.popleft()
-        recent.append((t_s, support))
-        return max(s for _, s in recent)
+        self.recent.append((t_s, support))
+        return self.best_recent(t_s)
 
     def line(self, region: RoadRegion) -> LaneLine | None:
         """The tracked boundary as a line in the region (support 0: it is an estimate, not evidence)."""
