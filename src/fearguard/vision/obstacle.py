@@ -29,11 +29,11 @@ from fearguard.vision.occlusion import (
     DARKER,
     FOREIGN_DEV_MIN,
     ROW_DEV,
-    SAT_DEV,
     SMOOTH_SHARE,
     SMOOTHER_SHARE,
     RoadAppearance,
     SurfaceMaps,
+    coloured_unlike_road,
     row_references,
     row_roughness,
 )
@@ -130,7 +130,7 @@ def foreign_mask(
     ref = max(road.grey, 1.0)
     off = np.abs(grey - ref) >= FOREIGN_DEV_MIN
     lit = grey >= SHADE_SAT_GATE * ref  # HLS saturation of dark pixels is unstable: a shadow is no coloured object
-    coloured = lit & ((sat >= COLOUR_SAT_MIN) | (np.abs(sat - road.saturation) >= SAT_DEV))
+    coloured = lit & coloured_unlike_road(sat, maps.hue[:, columns], road)
     foreign = off & (grey < DARKER * ref)
     if road.textured:
         if smooth_objects:

@@ -36,6 +36,10 @@ DARKER = 0.25  # [-] ... nor one darker than this share of it (deeper than a day
 FOREIGN_DEV_MIN = 30.0  # [grey levels] ... when it differs by at least this much (noise in the dark)
 COLOUR_SAT_MIN = 110  # [0..255] HLS saturation of car paint (yellow paint excluded by hue)
 SAT_DEV = 70  # [0..255] a saturation this far from the road's is a coloured object
+HUE_DEV = 20  # [OpenCV hue 0..180] on a saturated floor, a pixel as saturated as car paint this far from its hue (40°) is
+#               a coloured object: a blue box on an orange tarp is no more saturated than the tarp, but it is blue
+FLOOR_COLOURED_SHARE = 0.8  # [-] of the region's bottom rows, across its whole width, saturated (≥ COLOUR_SAT_MIN − SAT_DEV / 2)
+#                            and of one hue (resultant length ≥ this too): a coloured floor, not an object on a grey one
 YELLOW_HUE = (14, 40)  # [OpenCV hue 0..180] yellow paint is not car paint
 SMOOTH_SHARE = 0.35  # [-] a patch with less than this share of the road's roughness is a smooth object ...
 SMOOTHER_SHARE = 0.6  # [-] a brighter patch with less than this share of the road's roughness is a pale object
@@ -63,11 +67,13 @@ ACROSS_LANE = np.linspace(0.05, 0.95, ROW_SAMPLES)  # [-] of the lane width: ...
 
 @dataclass(frozen=True)
 class RoadAppearance:
-    """What the road looks like: median grey level, median HLS saturation, median patch roughness (std / mean)."""
+    """What the road looks like: median grey level, median HLS saturation, median patch roughness (std / mean), and —
+    on a saturated floor (a wood floor, an orange tarp) — its hue."""
 
     grey: float
     saturation: float
     roughness: float
+    hue: float = math.nan  # [OpenCV 0..180] a coloured floor's hue (circular mean); NaN: a grey road (``floor_hue``)
 
     def like(self, other: RoadAppearance) -> bool:
         """Same surface (within the model's tolerances)?"""
@@ -110,7 +116,7 @@ class RoadModel:
         self._unlike = 0
         self._seen.append(measured)
         grey, sat, rough = median(np.array([(a.grey, a.saturation, a.roughness) for a in self._seen]), axis=0)
-        self.current = RoadAppearance(float(grey), float(sat), float(rough))
+        self.current = RoadAppearance(float(grey), float(sat), float(rough), mean_hue(np.array([a.hue for a in self._seen])))
 
 
 @dataclass(frozen=True)
@@ -161,7 +167,7 @@ def road_appearance(
         if len(r):
             r, c = 1 + 2 * ROW_STEP * r, 2 * c
             grey, sat, rough = median(np.array([maps.grey[r, c], maps.saturation[r, c], maps.roughness[r, c]]), axis=1)
-            return RoadAppearance(float(grey), float(sat), float(rough))
+            return RoadAppearance(float(grey), float(sat), float(rough), floor_hue(maps))
     rows = np.arange(region.top_v_px + 1, region.bottom_v_px, 2 * ROW_STEP)
     a, b = left.u_at(rows.astype(float)), right.u_at(rows.astype(float))
     lo, hi = np.minimum(a, b), np.maximum(a, b)
@@ -169,7 +175,39 @@ def road_appearance(
     cols = clamp(np.rint(lo[:, None] + frac[None, :] * (hi - lo)[:, None]).astype(np.int64), 0, region.width_px - 1)
     r = (rows - maps.top_v_px)[:, None]
     grey, sat, rough = median(np.array([maps.grey[r, cols], maps.saturation[r, cols], maps.roughness[r, cols]]).reshape(3, -1), axis=1)
-    return RoadAppearance(float(grey), float(sat), float(rough))
+    return RoadAppearance(float(grey), float(sat), float(rough), floor_hue(maps))
+
+
+def floor_hue(maps: SurfaceMaps) -> float:
+    """A coloured floor's hue (a wood floor, an orange tarp), NaN for a grey road. The floor is coloured when the region's
+    bottom rows (REFERENCE_ROWS, the road just ahead), across the whole picture's width and so beyond the lane's lines
+    too, are saturated and of one hue (FLOOR_COLOURED_SHARE of them, and the hues' resultant length): an object in the
+    lane — a red car — covers the lane, not the floor on both sides of it."""
+    rows = max(1, round(REFERENCE_ROWS * maps.saturation.shape[0]))
+    sat, hue = maps.saturation[-rows::ROW_STEP, ::2], maps.hue[-rows::ROW_STEP, ::2]
+    coloured = sat >= COLOUR_SAT_MIN - 0.5 * SAT_DEV
+    if not coloured.mean() >= FLOOR_COLOURED_SHARE:
+        return math.nan
+    a = np.radians(2.0 * hue[coloured].astype(np.float64))
+    c, s = float(np.cos(a).mean()), float(np.sin(a).mean())
+    if not math.hypot(c, s) >= FLOOR_COLOURED_SHARE:
+        return math.nan
+    return (math.degrees(math.atan2(s, c)) % 360.0) / 2.0
+
+
+def mean_hue(hues: np.ndarray) -> float:
+    """Circular mean of OpenCV hues (0..180 = 0..360°), NaN ones left out; NaN when none is given."""
+    h = hues[np.isfinite(hues)]
+    if h.size == 0:
+        return math.nan
+    a = np.radians(2.0 * h)
+    return float(np.degrees(math.atan2(float(np.sin(a).sum()), float(np.cos(a).sum()))) % 360.0) / 2.0
+
+
+def hue_distance(hue: np.ndarray, reference: float) -> np.ndarray:
+    """Circular distance of OpenCV hues from a reference hue, 0..90 (= 0..180°)."""
+    d = np.abs(hue.astype(np.float32) - np.float32(reference)) % 180.0
+    return np.minimum(d, 180.0 - d)
 
 
 def road_reference(gray: np.ndarray, region: RoadRegion, left: LaneLine, right: LaneLine) -> float:
@@ -264,13 +302,23 @@ def hidden_at(
     # brighter than the road *and* smoother (a white or silver body; sunlit concrete keeps its texture), or darker than
     # any shadow (a black body, a tyre)
     foreign = off_grey & (((grey > BRIGHTER * ref) & smoother) | (grey < DARKER * ref))
-    coloured = (sat >= COLOUR_SAT_MIN) | (np.abs(sat - road.saturation) >= SAT_DEV)
+    coloured = coloured_unlike_road(sat, hue, road)
     coloured &= ~((hue >= YELLOW_HUE[0]) & (hue <= YELLOW_HUE[1]))
     row_road = row_uniform & (np.abs(grey - row_grey) <= np.maximum(FOREIGN_DEV_MIN, ROW_DEV * row_grey)) & ~smooth
     hidden = ((foreign & ~row_road) | coloured | smooth) & ~paint
     for x, y, w, h in boxes:
         hidden |= (centre >= x) & (centre < x + w) & (rows >= y) & (rows < y + h)
     return int(hidden.sum()), len(rows)
+
+
+def coloured_unlike_road(sat: np.ndarray, hue: np.ndarray, road: RoadAppearance) -> np.ndarray:
+    """Pixels coloured unlike the road, SAT_DEV from the road's saturation either way, or as saturated as car paint
+    (COLOUR_SAT_MIN): on a grey road (``road.hue`` NaN) any such pixel; on a coloured floor (a wood floor, an orange tarp:
+    the road, not an object over it) one half SAT_DEV more saturated than the floor, or of another hue (HUE_DEV)."""
+    paint = sat >= COLOUR_SAT_MIN
+    if math.isfinite(road.hue):
+        paint &= (sat - road.saturation >= 0.5 * SAT_DEV) | (hue_distance(hue, road.hue) >= HUE_DEV)
+    return paint | (np.abs(sat - road.saturation) >= SAT_DEV)
 
 
 @dataclass(frozen=True)
