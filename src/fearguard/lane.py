@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+MARKINGS = ("light", "dark")  # a track's markings: lighter than the floor (paint, white or yellow tape) or darker (black tape)
+
 
 @dataclass(frozen=True)
 class GroundLine:

@@ -138,7 +138,8 @@ class Perception:
                 "the steering's frame pipeline has another camera model than the one given to the supervisor: "
                 "build both with the same camera (e.g. HoughLaneSteering(camera=cam) and FearGuard(..., camera=cam))"
             )
-        self.pipeline = pipeline if pipeline is not None else FramePipeline(camera)
+        # its own pipeline finds the markings the track was learnt with (a given one: the steering's own)
+        self.pipeline = pipeline if pipeline is not None else FramePipeline(camera, markings=track.markings if track else "light")
         self.camera = self.pipeline.camera
         self.scan_qr = self.vehicle.has_qr_localisation  # no QR localisation on this car: no QR scan either
         v = self.vehicle

@@ -40,6 +40,12 @@ def test_a_model_car_replayed_without_camera_or_track_is_told_what_would_help(sh
     assert note == f"note: {check['advice']}"
     assert "fearguard learn" in note and "--track" in note and "--camera" in note and "dash-cam" in note
     assert f"{100 * check['lane_seen_share']:.0f} % of frames" in note
+    assert "--markings dark" in note  # the lane model looked for light paint: dark tape is worth a try
+
+
+def test_advice_after_looking_for_dark_tape_does_not_ask_for_it_again(shared_data, tmp_path, capsys):
+    check, _ = _replay([str(shared_data / TUB), "--vehicle", "donkey", "--to", "200f", "--markings", "dark"], tmp_path / "rp", capsys)
+    assert check["advice"] is not None and "fearguard learn" in check["advice"] and "--markings" not in check["advice"]
 
 
 def test_with_a_camera_file_the_advice_is_to_learn_the_track(shared_data, tmp_path, capsys):

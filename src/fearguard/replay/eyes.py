@@ -37,9 +37,10 @@ class Remedies:
 
     track: str  # how a learnt profile is given, after `fearguard learn RECORDING --out track.npz`
     camera: str  # how the camera's pose is given
+    markings: str | None = None  # how dark markings are asked for (None: only through a learnt profile, which learns them)
 
 
-CLI = Remedies(track="then `--track track.npz`", camera="`--camera camera.toml`, `fearguard calibrate`")
+CLI = Remedies(track="then `--track track.npz`", camera="`--camera camera.toml`, `fearguard calibrate`", markings="`--markings dark`")
 DONKEY = Remedies(track="then FEARGUARD_TRACK = \"track.npz\" in myconfig.py",
                   camera="FEARGUARD_CAMERA: a camera preset's name or a camera.toml from `fearguard calibrate`")
 
@@ -64,8 +65,9 @@ class EyesCheck:
     """Fed each frame's Command (``add``); ``finish`` gives the verdict. ``camera``/``track``: whether the supervisor had
     a camera model and a track profile (the advice names what is missing, in the words of ``remedies``)."""
 
-    def __init__(self, seen_threshold: float, camera: bool, track: bool, remedies: Remedies = CLI) -> None:
+    def __init__(self, seen_threshold: float, camera: bool, track: bool, remedies: Remedies = CLI, markings: str = "light") -> None:
         self.seen_threshold, self._camera, self._track, self._remedies = seen_threshold, camera, track, remedies
+        self._markings = markings  # the markings the lane model looked for (lane.MARKINGS)
         self._counts = np.zeros(_BINS + 1, np.int64)  # lane confidence in hundredths
         self._supervised = 0
         self._road_emergency = 0
@@ -98,15 +100,17 @@ class EyesCheck:
         if seen < SEEN_SHARE_MIN and road >= ROAD_EMERGENCY_SHARE_MIN and not self._track:
             advice = (f"the lane was seen (lane confidence >= {self.seen_threshold:g}) on {100 * seen:.0f} % of frames "
                       f"(median {median:.2f}) and the road picture held the car in EMERGENCY on {100 * road:.0f} %: "
-                      + _what_helps(self._camera, self._remedies))
+                      + _what_helps(self._camera, self._remedies, self._markings))
         return EyesVerdict(n, seen, median, road, self.seen_threshold, advice)
 
 
-def _what_helps(camera: bool, remedies: Remedies) -> str:
+def _what_helps(camera: bool, remedies: Remedies, markings: str = "light") -> str:
     learn = (f"learn this track from a recording of normal driving (`fearguard learn RECORDING --out track.npz`, "
              f"{remedies.track}; docs/learning.md)")
+    dark = (f"; a track taped in black or dark tape: {remedies.markings} (the lane model looked for light paint)"
+            if markings == "light" and remedies.markings else "")
     if camera:
-        return f"this track's guidance is not what the camera's lane model looks for; {learn}"
+        return f"this track's guidance is not what the camera's lane model looks for; {learn}{dark}"
     return (f"without a camera model the lane model looks where a dash-cam sees the road ({100 * TOP_FRACTION:.0f}-"
             f"{100 * BOTTOM_FRACTION:.0f} % of the picture's height, narrowing toward the middle); {learn}, or give the camera's "
-            f"pose ({remedies.camera})")
+            f"pose ({remedies.camera}){dark}")

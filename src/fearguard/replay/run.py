@@ -41,6 +41,7 @@ from fearguard.replay.recordings import open_recording
 from fearguard.replay.sensor_log import Readings, load_sensor_log
 from fearguard.replay.sources import Frame, SourceError, parse_position
 from fearguard.supervisor import FearGuard
+from fearguard.track.profile import load_track
 from fearguard.vehicle import VehicleLimits
 from fearguard.vision.lane_steering import HoughLaneSteering
 
@@ -68,6 +69,7 @@ class ReplayOptions:
     mcap: bool = False  # also write run.mcap for Foxglove (outputs/mcap.py)
     topics: BagTopics = field(default_factory=BagTopics)  # a ROS bag's topics (replay/bags.py); None fields: picked
     track: str | None = None  # a track profile from `fearguard learn` (None: no familiarity cue)
+    markings: str | None = None  # the built-in lane model's markings (lane.MARKINGS); None: the track profile's, else light
 
 
 @dataclass(frozen=True)
@@ -96,8 +98,12 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     camera: CameraModel | None = load_camera(options.camera) if options.camera else None
     has_us = log_data is not None and not options.no_ultrasonic and bool({"ultrasonic_range_m", "echo_s"} & set(log_data.columns))
     vehicle = replace(options.vehicle, has_ultrasonic=has_us, has_qr_localisation=options.qr_localisation)
-    steer = options.steer if options.steer is not None else HoughLaneSteering(camera=camera, fps=source.fps)
-    guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera, track=options.track)
+    track = load_track(options.track) if options.track else None
+    if options.markings is not None and options.steer is not None:
+        raise ValueError("markings set the built-in lane model's markings; your own steering finds its own")
+    markings = options.markings or (track.markings if track is not None else "light")
+    steer = options.steer if options.steer is not None else HoughLaneSteering(camera=camera, fps=source.fps, markings=markings)
+    guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera, track=track)
     start = parse_position(options.start, source.fps) if options.start else 0
     stop_at = parse_position(options.stop, source.fps) if options.stop else None
     _check_span(source_path, source.expected_frames, source.fps, start, stop_at, options)
@@ -105,7 +111,8 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     frames = source.iter_frames(start, stop_at, options.every)
     ahead = options.read_ahead if options.read_ahead is not None else usable_cores() > 1
     pitch = PitchCheck(camera)
-    eyes = EyesCheck(guard.rules.policy.recovery_min_confidence, camera=camera is not None, track=options.track is not None)
+    eyes = EyesCheck(guard.rules.policy.recovery_min_confidence, camera=camera is not None, track=track is not None,
+                     markings=markings if options.steer is None else "custom")
     pause_s = watchdog_s(options.every / source.fps, guard.rules.policy) if source.kind == "tub" else None
     world = RecordingWorld(read_ahead(frames) if ahead else frames, source.fps / options.every, log_data, options.speed_mps, pitch,
                            pause_s, eyes)

@@ -44,6 +44,8 @@ COMPONENTS = 24  # principal components kept: enough for a track's few kinds of 
 BANK_MAX = 2000  # [frames] learnt frames kept for the comparison (more: thinned evenly; keeps a frame ≤ 1 ms)
 CALIBRATION_MAX = 1000  # [frames] frames whose distances calibrate the cue
 ANALYSED_MAX = 1500  # [frames] frames the camera pipeline measures for the light band and the lane confidence
+DARK_MARGIN = 0.05  # [0..1] dark markings are learnt only when the lane model's median confidence with them is this much
+#                    higher than with light ones (noise on a track where neither sees anything keeps the default)
 MOVING_THROTTLE = 0.05  # [-] a tub frame with throttle at or below this is the car standing or backing: not normal driving
 MIN_FRAMES = 20  # [frames] fewer normal-driving frames than this teach nothing
 MARKING_CLUSTERS = 4  # colour clusters of high-contrast floor pixels tried as markings
@@ -82,6 +84,8 @@ class _Frames:
     t_s: list[float]
     brightness: list[float]
     lane: list[float]
+    lane_dark: list[float]  # the lane confidence and occlusion with dark markings (black tape) on the same frames
+    occlusion_dark: list[float]
     occlusion: list[float]
     marking_pixels: list[np.ndarray]
     floor: list[FloorView]
@@ -92,13 +96,14 @@ class _Frames:
 def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnOptions(),
                 on_frame: Callable[[int], None] | None = None) -> Learnt:
     """Learn a profile from recordings of normal driving (raises ``FearguardError`` when there is too little)."""
-    got = _Frames([], [], [], [], [], [], [], [], [], [])
+    got = _Frames([], [], [], [], [], [], [], [], [], [], [], [])
     read = standing = skipped = 0
     for rec_id, path in enumerate(recordings):
         source = open_recording(path, options.fps)
         start = parse_position(options.start, source.fps) if options.start else 0
         stop = parse_position(options.stop, source.fps) if options.stop else None
         pipeline = FramePipeline(options.camera)
+        dark = FramePipeline(options.camera, markings="dark")
         total = source.expected_frames
         stride = max(1, math.ceil((total or ANALYSED_MAX) / options.every / ANALYSED_MAX))
         for k, frame in enumerate(source.iter_frames(start, stop, options.every)):
@@ -120,6 +125,9 @@ def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnO
                 a = pipeline.process(frame.image_bgr, frame.t_s)
                 got.brightness.append(a.brightness)
                 got.lane.append(a.lane_confidence)
+                d = dark.process(frame.image_bgr, frame.t_s)
+                got.lane_dark.append(d.lane_confidence)
+                got.occlusion_dark.append(d.occlusion)
                 got.occlusion.append(a.occlusion)
                 got.marking_pixels.append(_contrast_pixels(frame.image_bgr))
                 got.floor.append(floor_view(frame.image_bgr))
@@ -163,16 +171,32 @@ def _fit(got: _Frames, source: str) -> TrackProfile:
     light_calib = _calibration(light, keep, recording, t_s)
     b = np.array([x for x in got.brightness if math.isfinite(x)])
     band = tuple(float(v) for v in np.percentile(b, BAND_PERCENTILES)) if b.size else (0.0, 255.0)
-    lanes = np.array([x for x in got.lane if math.isfinite(x)])
-    occ = np.array([x for x in got.occlusion if math.isfinite(x)])
+    markings = learnt_markings(got.lane, got.lane_dark)
+    lanes = _finite(got.lane if markings == "light" else got.lane_dark)
+    occ = _finite(got.occlusion if markings == "light" else got.occlusion_dark)
     return TrackProfile(
         source=source, frames_learnt=len(feats), mean=mean, weights=weights, basis=basis, bank=bank,
         calibration_distances=np.sort(calib), brightness_band=(band[0], band[1]),
         lane_confidence_median=float(np.median(lanes)) if lanes.size else math.nan,
         marking_colours_bgr=_marking_colours(got.marking_pixels),
         occlusion_usual=float(np.percentile(occ, OCCLUSION_PERCENTILE)) if occ.size else math.nan,
-        floor=learn_floor(got.floor), light=LightModel(light[keep], np.sort(light_calib)),
+        floor=learn_floor(got.floor), light=LightModel(light[keep], np.sort(light_calib)), markings=markings,
     )
+
+
+def learnt_markings(light: Sequence[float], dark: Sequence[float]) -> str:
+    """The markings the camera's lane model sees this track by, from its lane confidences on the recordings with each:
+    dark (black or dark tape) where the median beats the light markings' (paint, white or yellow tape) by DARK_MARGIN,
+    else light. Unknown confidences (NaN) are left out; none known counts as 0."""
+    def median(xs: Sequence[float]) -> float:
+        v = _finite(xs)
+        return float(np.median(v)) if v.size else 0.0
+
+    return "dark" if median(dark) >= median(light) + DARK_MARGIN else "light"
+
+
+def _finite(xs: Sequence[float]) -> np.ndarray:
+    return np.array([x for x in xs if math.isfinite(x)], dtype=np.float64)
 
 
 def _calibration(embedded: np.ndarray, keep: np.ndarray, recording: np.ndarray, t_s: np.ndarray) -> np.ndarray:

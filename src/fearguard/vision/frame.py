@@ -25,6 +25,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
+from fearguard.lane import MARKINGS
 from fearguard.observation import Lead, LeadBox
 from fearguard.vision.bend import Bend, trace_bend
 from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
@@ -39,6 +40,7 @@ from fearguard.vision.lanes import (
     detect_lanes,
     far_shift_px,
     lane_width_rows,
+    marking_view,
     region_mask,
     region_toward,
     road_region,
@@ -117,8 +119,13 @@ class FramePipeline:
 
     def __init__(
         self, camera: CameraModel | None = None, fps: float = 20.0, *, trackers: Callable[[], Trackers] = Trackers.tracking,
-        ground: GroundLaneSpec | None = None, aim_m: float | None = None,
+        ground: GroundLaneSpec | None = None, aim_m: float | None = None, markings: str = "light",
     ) -> None:
+        if markings not in MARKINGS:
+            raise ValueError(f"markings must be one of {', '.join(MARKINGS)}, got {markings!r}")
+        if markings != "light" and ground is not None:
+            raise ValueError("the ground-plane lane model reads light paint only: give dark markings without a ground spec")
+        self._markings = markings
         self._camera = camera
         mounted = camera is not None and camera.mount_height_m is not None  # only a known height places ground distances
         self._ground = ground if mounted else None
@@ -145,6 +152,11 @@ class FramePipeline:
         """The camera model every frame is analysed with (None: an uncalibrated default for the frame size)."""
         return self._camera
 
+    @property
+    def markings(self) -> str:
+        """The track's markings the lanes are found by (``lane.MARKINGS``): light paint or tape, or dark tape."""
+        return self._markings
+
     def reset(self) -> None:
         """Forget the trackers, the lane memory and the frame count (the camera stays)."""
         self.trackers = self._new_trackers()
@@ -167,7 +179,7 @@ class FramePipeline:
         t = t_s if t_s is not None and math.isfinite(t_s) else self._frames * self.period_s
         qr = scan_qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
         return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr, ground=self._ground, speed_mps=speed_mps,
-                        aim_m=self._aim_m, path=path)
+                        aim_m=self._aim_m, path=path, markings=self._markings)
 
 
 def analyze_frame(frame_bgr: object, camera: CameraModel | None = None) -> FrameAnalysis:
@@ -193,6 +205,7 @@ class Prepared:
     hls: np.ndarray
     exposure: Exposure  # of the road region
     work: np.ndarray | None = None  # working-size BGR of the road rows, 0 elsewhere (the ground model judges paint colour on it)
+    marks: np.ndarray | None = None  # the HLS image the marking finder reads (``lanes.marking_view``; None: ``hls``)
 
 
 @dataclass(frozen=True)
@@ -236,8 +249,9 @@ class LeadAndOcclusion:
     stop_line_m: float | None = None  # [m] a painted band across the ego lane (vision/obstacle.py: search_lane)
 
 
-def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
-    """BGR at the frame's size (undistorted when a camera is given), then grey/HLS of the road rows at the working size."""
+def prepare(frame: np.ndarray, camera: CameraModel | None, markings: str = "light") -> Prepared:
+    """BGR at the frame's size (undistorted when a camera is given), then grey/HLS of the road rows at the working size,
+    and the HLS view the marking finder reads for the track's ``markings`` (``lane.MARKINGS``)."""
     bgr = _as_bgr(frame)
     fh, fw = bgr.shape[:2]
     cam = _frame_camera(camera, fw, fh)
@@ -249,7 +263,8 @@ def prepare(frame: np.ndarray, camera: CameraModel | None) -> Prepared:
     work = reduce_rows(bgr, ww, wh, band)
     gray, hls = _band_conversions(work, region)
     return Prepared(bgr=bgr, camera=cam, scale=fw / ww, region=region, mask=mask, gray=gray, hls=hls,
-                    exposure=road_exposure(gray[band], mask[band]), work=work)
+                    exposure=road_exposure(gray[band], mask[band]), work=work,
+                    marks=marking_view(hls, region.top_v_px, region.bottom_v_px, markings))
 
 
 def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSpec | None = None, aim_m: float | None = None) -> Lanes:
@@ -269,7 +284,7 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
                          curves_px=fit.curves_px, interior=fit.interior, hls_white=fit.hls_white, white=fit.white)
     shift = far_shift_px(trackers.memory.far_centre_u_px, region)
     mask = region_toward(region, shift) if shift else p.mask  # the far edge where last frame's lane went
-    det = detect_lanes(p.hls, region, mask, trackers.lanes.current(region))
+    det = detect_lanes(p.hls if p.marks is None else p.marks, region, mask, trackers.lanes.current(region))
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
     tracked = trackers.lanes.update(t_s, region, det.left, det.right)
     left = det.left if tracked.left is None or det.left is None else _with_track(det.left, tracked.left)
@@ -440,6 +455,7 @@ def steer(p: Prepared, lanes: Lanes, trackers: Trackers, ground: GroundLaneSpec 
 def _analyze(
     frame: object, camera: CameraModel | None, trackers: Trackers, t_s: float, lead_box: LeadBox | None, *, qr: bool,
     ground: GroundLaneSpec | None = None, speed_mps: float | None = None, aim_m: float | None = None, path: RoutePath | None = None,
+    markings: str = "light",
 ) -> FrameAnalysis:
     """The stages in order, each timed."""
     bad = invalid_frame_reason(frame)
@@ -447,7 +463,7 @@ def _analyze(
         return unknown_analysis(f"camera: {bad}: vision cues unknown (worst)")
     clock = time.perf_counter
     t0 = clock()
-    p = prepare(frame, camera)
+    p = prepare(frame, camera, markings)
     t1 = clock()
     if ground is not None:
         ground = trackers.ground.spec_now(ground)  # the lane width measured so far, when the spec measures it

@@ -23,6 +23,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
+from fearguard.lane import MARKINGS
 from fearguard.vision.exposure import SATURATED_MIN
 from fearguard.vision.ridges import RidgeMaps, ridge_maps, scan_ridges
 
@@ -263,6 +264,22 @@ _YELLOW_CHROMA = YELLOW_SAT_MIN * YELLOW_LIGHT_MIN  # saturation × lightness of
 # over a background too bright for the ratio to fit under the clip (b > ~217: glare's veil), paint reaching the clip
 # (SATURATED_MIN) is as bright as the camera can show it: the ratio is not seen there, RIDGE_MIN still is
 _BRIGHT_MIN = np.maximum(RIDGE_MIN, np.minimum(np.ceil(RIDGE_RATIO * np.arange(256)), SATURATED_MIN - np.arange(256))).astype(np.uint8)
+
+
+def marking_view(hls: np.ndarray, top_v_px: int, bottom_v_px: int, markings: str = "light") -> np.ndarray:
+    """The HLS image the marking finder reads (``MARKINGS``): the picture itself for light markings; for dark ones — black,
+    dark blue or dark red tape on a paler floor — the road rows' lightness inverted, so a dark line is a ridge found by the
+    same top-hat, ridge-width and flank tests as paint (contrast to the local background, by a ratio), and their
+    saturation cleared (the yellow-paint test is for light paint). The rows outside top..bottom are returned as given."""
+    if markings == "light":
+        return hls
+    if markings != "dark":
+        raise ValueError(f"markings must be one of {', '.join(MARKINGS)}, got {markings!r}")
+    view = hls.copy()
+    band = view[top_v_px : bottom_v_px + 1]
+    band[:, :, 1] = cv2.bitwise_not(np.ascontiguousarray(band[:, :, 1]))
+    band[:, :, 2] = 0
+    return view
 
 
 def smoothed_light(hls: np.ndarray) -> np.ndarray:
