@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 from fearguard.drive.interrupt import StopSignal, stop_on_signals
 from fearguard.errors import FearguardError
-from fearguard.lane import MARKINGS
+from fearguard.lane import GUIDANCE, MARKINGS
 from fearguard.vehicle import PRESETS
 
 SIM_CONTROLLERS = ("guarded", "unguarded", "crisp", "aeb")  # sim.loop.CONTROLLERS, in its order (tests/test_cli_habits.py holds
@@ -308,18 +308,18 @@ def cmd_replay(args: argparse.Namespace) -> int:
     from fearguard.replay.run import ReplayOptions, replay
     from fearguard.vehicle import resolve_vehicle
 
+    if (args.markings is not None or args.guidance is not None) and args.steer is not None:
+        raise FearguardError("--markings and --guidance set the built-in lane model's; your own steering (--steer) finds its own")
     if len(args.recordings) > 1:
         return _replay_fleet(args)
     args.recording = args.recordings[0]
-    if args.markings is not None and args.steer is not None:
-        raise FearguardError("--markings sets the built-in lane model's markings; your own steering (--steer) finds its own")
     steer, _ = resolve_steer(args.steer)
     options = ReplayOptions(
         rules=args.rules, camera=args.camera, sensor_log=args.sensor_log, strict=args.strict, no_ultrasonic=args.no_ultrasonic,
         qr_localisation=args.qr_localisation, speed_mps=args.speed_mps, fps=args.fps, start=args.from_, stop=args.to,
         every=args.every, video=args.video, plots=not args.no_plots, vehicle=resolve_vehicle(args.vehicle), steer=steer,
         mcap=args.mcap, topics=BagTopics(args.image_topic, args.range_topic, args.speed_topic, args.qr_topic), track=args.track,
-        markings=args.markings,
+        markings=args.markings, guidance=args.guidance,
     )
     out = args.out or _new_out("replay", args.recording.rstrip("/\\"))
     with _Progress("replay") as progress:
@@ -352,6 +352,7 @@ def _replay_fleet(args: argparse.Namespace) -> int:
                "qr_localisation": args.qr_localisation, "speed_mps": args.speed_mps, "fps": args.fps, "start": args.from_,
                "stop": args.to, "every": args.every, "video": args.video, "plots": not args.no_plots, "mcap": args.mcap,
                "vehicle": args.vehicle, "steer": args.steer, "track": args.track, "markings": args.markings,
+               "guidance": args.guidance,
                "topics": {"image": args.image_topic, "range": args.range_topic, "speed": args.speed_topic, "qr": args.qr_topic}}
     specs = fleet.plan(args.recordings, out, options)
     print(f"replay: {len(specs)} recordings → {out}{_on(executor)}", file=sys.stderr)
@@ -459,7 +460,8 @@ def cmd_learn(args: argparse.Namespace) -> int:
              f"{'/'.join(f'{g:.0f}' for g in grey_levels(np.median(p.light.levels, axis=0)))}, reference distance "
              f"{p.light_reference:.3f}"))
     print(f"  lane: median confidence {p.lane_confidence_median:.2f} on the recordings, looking for {p.markings} markings "
-          f"({'black or dark tape' if p.markings == 'dark' else 'paint or light tape'}): {lane}")
+          f"({'black or dark tape' if p.markings == 'dark' else 'paint or light tape'}), guided by "
+          f"{p.guidance.replace('_', ' ')}: {lane}")
     print(f"  markings: {colours}")
     floor = p.floor
     print("  floor: none learnt" if floor is None else
@@ -937,6 +939,9 @@ def build_parser() -> argparse.ArgumentParser:
     rp.add_argument("--track", default=None, help="track profile from `fearguard learn` (adds the familiarity cue)")
     rp.add_argument("--markings", choices=MARKINGS, default=None, help="the track's markings the built-in lane model looks for: "
                     "light paint or tape, or dark (black) tape on a paler floor (default: the track profile's, else light)")
+    rp.add_argument("--guidance", choices=GUIDANCE, default=None, help="what the track guides the car by: the lane's two lines, "
+                    "or one line — a centre line, one edge — whose own support is the lane confidence (default: the track "
+                    "profile's, else two_lines)")
     rp.add_argument("--no-ultrasonic", action="store_true", help="the car has no ultrasonic (even if the log has a column)")
     rp.add_argument("--qr-localisation", action="store_true", help="the car localises with QR markers (scan frames, staleness cue)")
     rp.add_argument("--speed-mps", type=_number(0.0), default=None, help="the recording's speed when the log has none (default: unknown)")

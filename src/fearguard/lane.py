@@ -10,6 +10,8 @@ import math
 from dataclasses import dataclass
 
 MARKINGS = ("light", "dark")  # a track's markings: lighter than the floor (paint, white or yellow tape) or darker (black tape)
+GUIDANCE = ("two_lines", "centre_line", "one_edge")  # what a track guides the car by: the lane's two boundaries, or one line —
+#   along the middle of the course (a centre line the car follows) or at one side (one edge)
 
 
 @dataclass(frozen=True)

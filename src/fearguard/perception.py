@@ -139,7 +139,8 @@ class Perception:
                 "build both with the same camera (e.g. HoughLaneSteering(camera=cam) and FearGuard(..., camera=cam))"
             )
         # its own pipeline finds the markings the track was learnt with (a given one: the steering's own)
-        self.pipeline = pipeline if pipeline is not None else FramePipeline(camera, markings=track.markings if track else "light")
+        own = {"markings": track.markings, "guidance": track.guidance} if track is not None else {}
+        self.pipeline = pipeline if pipeline is not None else FramePipeline(camera, **own)
         self.camera = self.pipeline.camera
         self.scan_qr = self.vehicle.has_qr_localisation  # no QR localisation on this car: no QR scan either
         v = self.vehicle
@@ -264,7 +265,9 @@ class Perception:
         ev, ex = analysis.evidence, analysis.exposure
         if ev is not None:
             facts.append(
-                f"lane: confidence {ev.confidence:.2f} (support L {ev.support_left:.2f} R {ev.support_right:.2f}, "
+                f"lane: confidence {ev.confidence:.2f} ("
+                + ("" if ev.guidance == "two_lines" else f"guidance {ev.guidance.replace('_', ' ')}: its best line; ")
+                + f"support L {ev.support_left:.2f} R {ev.support_right:.2f}, "
                 f"geometry {ev.geometry:.2f}, agreement {ev.agreement:.2f}, visibility {ev.visibility:.2f})"
             )
         if math.isfinite(ex.brightness):

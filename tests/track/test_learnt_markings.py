@@ -16,7 +16,17 @@ from hypothesis import strategies as st
 import fearguard as fg
 from fearguard.cli import main
 from fearguard.errors import FileError
-from fearguard.track.learn import DARK_MARGIN, LearnOptions, learn_track, learnt_markings
+from fearguard.track.learn import (
+    CENTRE_SHARE,
+    DARK_MARGIN,
+    ONE_LINE_MIN_SHARE,
+    ONE_LINE_RATIO,
+    LaneRead,
+    LearnOptions,
+    learn_track,
+    learnt_guidance,
+    learnt_markings,
+)
 from fearguard.track.profile import load_track, save_track
 from tests.vision.test_dark_markings import DARK_TAPES, FLOORS, track_frame
 
@@ -97,3 +107,67 @@ def test_replay_finds_the_dark_lane_with_the_profile_or_the_option_and_not_witho
     with pytest.raises(SystemExit) as bad:
         main(["replay", str(rec), "--markings", "grey", "--out", str(tmp_path / "y")])
     assert bad.value.code == 2 and "--markings" in capsys.readouterr().err
+
+
+def _one_line_recording(folder: Path, where: float, tape=(235, 235, 235), floor=(45, 45, 50)) -> Path:
+    """An image folder of a track guided by one line: its bottom end at ``where`` of the width (0.5: a centre line)."""
+    folder.mkdir(parents=True)
+    rng = np.random.default_rng(7)
+    for i in range(FRAMES):
+        img = np.clip(np.full((240, 320, 3), floor, np.int16) + rng.normal(0, 4, (240, 320, 3)), 0, 255).astype(np.uint8)
+        bottom = 320 * where + 15.0 * math.sin(i / 7.0)
+        far = (160.0 + 0.3 * (bottom - 160.0), 0.45 * 240 + 0.3 * (240 - 0.45 * 240))
+        cv2.line(img, (round(bottom), 240), (round(far[0]), round(far[1])), tape, 6, cv2.LINE_AA)
+        cv2.imwrite(str(folder / f"{i:04d}.png"), img)
+    return folder
+
+
+@pytest.mark.parametrize(("where", "guidance"), [(0.5, "centre_line"), (0.15, "one_edge"), (0.85, "one_edge")])
+def test_a_track_guided_by_one_line_is_learnt_so_and_replayed_with_its_own_confidence(tmp_path, where, guidance):
+    rec = _one_line_recording(tmp_path / "frames", where)
+    profile = learn_track([rec], LearnOptions(fps=20.0)).profile
+    assert profile.guidance == guidance and profile.markings == "light" and profile.lane_confidence_median >= 0.5
+    track = save_track(profile, tmp_path / "t.npz")
+    assert load_track(track).guidance == guidance
+    medians = {}
+    for name, extra in (("profile", ["--track", str(track)]), ("two", []), ("option", ["--guidance", guidance])):
+        out = tmp_path / name
+        assert main(["replay", str(rec), "--fps", "20", "--out", str(out), "--no-plots", *extra]) == 0
+        rows = [json.loads(line) for line in (out / "log.jsonl").read_text().splitlines()]
+        medians[name] = float(np.median([r["lane_confidence"] for r in rows]))
+    assert medians["option"] >= 0.6 and medians["two"] <= 0.5  # one boundary of two counts half
+
+
+def test_a_two_line_track_is_learnt_as_two_lines(dark_track):
+    assert dark_track[0].guidance == "two_lines"
+
+
+def test_a_wrong_guidance_in_a_profile_names_its_key(dark_track, tmp_path):
+    with np.load(save_track(dark_track[0], tmp_path / "t.npz")) as z:
+        data = {k: z[k] for k in z.files}
+    bad = tmp_path / "bad.npz"
+    np.savez(bad, **{**data, "guidance": np.array("three_lines")})
+    with pytest.raises(FileError, match="guidance"):
+        load_track(bad)
+
+
+def test_the_lane_reason_names_a_one_line_guidance(tmp_path):
+    rec = _one_line_recording(tmp_path / "frames", 0.5)
+    frame = cv2.imread(str(sorted(rec.iterdir())[0]))
+    for guidance, says in (("centre_line", "guidance centre line: its best line"), ("two_lines", None)):
+        perception = fg.FearGuard(fg.HoughLaneSteering(guidance=guidance)).perception
+        facts = " ".join(perception.perceive(fg.Observation(frame=frame, t_s=0.0)).facts)
+        assert "lane: confidence" in facts and ((says in facts) if says else ("guidance" not in facts))
+
+
+@settings(max_examples=100, deadline=None, derandomize=True)
+@given(views=st.lists(st.sampled_from([(), (0.5,), (0.1,), (0.9,), (0.2, 0.8)]), max_size=40))
+def test_one_line_is_learnt_only_from_enough_frames_that_show_one_line(views):
+    reads = [LaneRead(0.5, 0.0, None, v) for v in views]
+    one = [v[0] for v in views if len(v) == 1]
+    both = sum(len(v) == 2 for v in views)
+    got = learnt_guidance(reads)
+    if not one or len(one) < ONE_LINE_MIN_SHARE * len(views) or len(one) < ONE_LINE_RATIO * both:
+        assert got == "two_lines"
+    else:
+        assert got == ("centre_line" if abs(float(np.median(one)) - 0.5) <= CENTRE_SHARE else "one_edge")

@@ -70,6 +70,7 @@ class ReplayOptions:
     topics: BagTopics = field(default_factory=BagTopics)  # a ROS bag's topics (replay/bags.py); None fields: picked
     track: str | None = None  # a track profile from `fearguard learn` (None: no familiarity cue)
     markings: str | None = None  # the built-in lane model's markings (lane.MARKINGS); None: the track profile's, else light
+    guidance: str | None = None  # ... and the track's guidance (lane.GUIDANCE); None: the track profile's, else two lines
 
 
 @dataclass(frozen=True)
@@ -99,10 +100,12 @@ def replay(source_path: str | Path, out_dir: str | Path, options: ReplayOptions 
     has_us = log_data is not None and not options.no_ultrasonic and bool({"ultrasonic_range_m", "echo_s"} & set(log_data.columns))
     vehicle = replace(options.vehicle, has_ultrasonic=has_us, has_qr_localisation=options.qr_localisation)
     track = load_track(options.track) if options.track else None
-    if options.markings is not None and options.steer is not None:
-        raise ValueError("markings set the built-in lane model's markings; your own steering finds its own")
+    if (options.markings is not None or options.guidance is not None) and options.steer is not None:
+        raise ValueError("markings and guidance are the built-in lane model's; your own steering finds its own")
     markings = options.markings or (track.markings if track is not None else "light")
-    steer = options.steer if options.steer is not None else HoughLaneSteering(camera=camera, fps=source.fps, markings=markings)
+    guidance = options.guidance or (track.guidance if track is not None else "two_lines")
+    steer = options.steer if options.steer is not None else HoughLaneSteering(camera=camera, fps=source.fps, markings=markings,
+                                                                              guidance=guidance)
     guard = FearGuard(steer, rules=load_rules(options.rules), vehicle=vehicle, camera=camera, track=track)
     start = parse_position(options.start, source.fps) if options.start else 0
     stop_at = parse_position(options.stop, source.fps) if options.stop else None

@@ -7,8 +7,10 @@ below ``MOVING_THROTTLE``) are not normal driving and are left out. From the res
 - the familiarity model (``profile.py``): weighted features, their principal components, a bank of learnt frames
   and the recordings' own distances for the calibration;
 - the normal light: the ``BAND_PERCENTILES`` of the brightness cue as the camera pipeline measures it;
-- the camera's lane confidence on this track (its median), how much of the marking region its occlusion measure calls
-  hidden in normal driving (``OCCLUSION_PERCENTILE``), and the colours of the track's markings;
+- the markings the camera's lane model sees this track by (light paint or dark tape: ``learnt_markings``) and what the
+  track guides the car by (two lines, a centre line, one edge: ``learnt_guidance``); with them, its lane confidence on
+  this track (the median), how much of the marking region its occlusion measure calls hidden in normal driving
+  (``OCCLUSION_PERCENTILE``), and the colours of the track's markings;
 - the floor: its colours and where the picture usually shows it (``floor.py``);
 - the light's shape: each learnt frame's grey levels (``light.py``), calibrated like the familiarity.
 """
@@ -25,6 +27,7 @@ import numpy as np
 
 from fearguard.camera import CameraModel
 from fearguard.errors import FearguardError
+from fearguard.lane import MARKINGS
 from fearguard.replay.recordings import open_recording
 from fearguard.replay.sources import parse_position
 from fearguard.track.features import features_of, shrink
@@ -38,12 +41,16 @@ from fearguard.track.profile import (
     TrackProfile,
     block_weights,
 )
-from fearguard.vision.frame import FramePipeline
+from fearguard.vision.confidence import LaneEvidence
+from fearguard.vision.frame import SEEN_WELL_SUPPORT, FrameAnalysis, FramePipeline
 
 COMPONENTS = 24  # principal components kept: enough for a track's few kinds of view, few enough to be fast
 BANK_MAX = 2000  # [frames] learnt frames kept for the comparison (more: thinned evenly; keeps a frame ≤ 1 ms)
 CALIBRATION_MAX = 1000  # [frames] frames whose distances calibrate the cue
 ANALYSED_MAX = 1500  # [frames] frames the camera pipeline measures for the light band and the lane confidence
+ONE_LINE_RATIO = 3.0  # [-] frames showing one boundary seen well per frame showing both, from which one line guides the track
+ONE_LINE_MIN_SHARE = 0.25  # [-] of the analysed frames: fewer showing one line seen well teach nothing about the guidance
+CENTRE_SHARE = 0.2  # [-] of the width: a one-line track's line this close to the picture's middle is a centre line
 DARK_MARGIN = 0.05  # [0..1] dark markings are learnt only when the lane model's median confidence with them is this much
 #                    higher than with light ones (noise on a track where neither sees anything keeps the default)
 MOVING_THROTTLE = 0.05  # [-] a tub frame with throttle at or below this is the car standing or backing: not normal driving
@@ -83,10 +90,7 @@ class _Frames:
     recording: list[int]
     t_s: list[float]
     brightness: list[float]
-    lane: list[float]
-    lane_dark: list[float]  # the lane confidence and occlusion with dark markings (black tape) on the same frames
-    occlusion_dark: list[float]
-    occlusion: list[float]
+    lanes: dict[str, list[LaneRead]]  # per markings (lane.MARKINGS): the camera lane model's reading of each analysed frame
     marking_pixels: list[np.ndarray]
     floor: list[FloorView]
     typical: list[np.ndarray]
@@ -96,14 +100,13 @@ class _Frames:
 def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnOptions(),
                 on_frame: Callable[[int], None] | None = None) -> Learnt:
     """Learn a profile from recordings of normal driving (raises ``FearguardError`` when there is too little)."""
-    got = _Frames([], [], [], [], [], [], [], [], [], [], [], [])
+    got = _Frames([], [], [], [], {m: [] for m in MARKINGS}, [], [], [], [])
     read = standing = skipped = 0
     for rec_id, path in enumerate(recordings):
         source = open_recording(path, options.fps)
         start = parse_position(options.start, source.fps) if options.start else 0
         stop = parse_position(options.stop, source.fps) if options.stop else None
-        pipeline = FramePipeline(options.camera)
-        dark = FramePipeline(options.camera, markings="dark")
+        pipelines = {m: FramePipeline(options.camera, markings=m) for m in MARKINGS}
         total = source.expected_frames
         stride = max(1, math.ceil((total or ANALYSED_MAX) / options.every / ANALYSED_MAX))
         for k, frame in enumerate(source.iter_frames(start, stop, options.every)):
@@ -122,13 +125,11 @@ def learn_track(recordings: Sequence[str | Path], options: LearnOptions = LearnO
             got.recording.append(rec_id)
             got.t_s.append(frame.t_s)
             if k % stride == 0:
-                a = pipeline.process(frame.image_bgr, frame.t_s)
-                got.brightness.append(a.brightness)
-                got.lane.append(a.lane_confidence)
-                d = dark.process(frame.image_bgr, frame.t_s)
-                got.lane_dark.append(d.lane_confidence)
-                got.occlusion_dark.append(d.occlusion)
-                got.occlusion.append(a.occlusion)
+                for m, pipeline in pipelines.items():
+                    a = pipeline.process(frame.image_bgr, frame.t_s)
+                    got.lanes[m].append(LaneRead.of(a))
+                    if m == "light":
+                        got.brightness.append(a.brightness)
                 got.marking_pixels.append(_contrast_pixels(frame.image_bgr))
                 got.floor.append(floor_view(frame.image_bgr))
                 if len(got.typical) < 64:
@@ -171,9 +172,11 @@ def _fit(got: _Frames, source: str) -> TrackProfile:
     light_calib = _calibration(light, keep, recording, t_s)
     b = np.array([x for x in got.brightness if math.isfinite(x)])
     band = tuple(float(v) for v in np.percentile(b, BAND_PERCENTILES)) if b.size else (0.0, 255.0)
-    markings = learnt_markings(got.lane, got.lane_dark)
-    lanes = _finite(got.lane if markings == "light" else got.lane_dark)
-    occ = _finite(got.occlusion if markings == "light" else got.occlusion_dark)
+    markings = learnt_markings([r.confidence for r in got.lanes["light"]], [r.confidence for r in got.lanes["dark"]])
+    reads = got.lanes[markings]
+    guidance = learnt_guidance(reads)
+    lanes = _finite([r.confidence if guidance == "two_lines" else r.as_guidance(guidance) for r in reads])
+    occ = _finite([r.occlusion for r in reads])
     return TrackProfile(
         source=source, frames_learnt=len(feats), mean=mean, weights=weights, basis=basis, bank=bank,
         calibration_distances=np.sort(calib), brightness_band=(band[0], band[1]),
@@ -181,6 +184,7 @@ def _fit(got: _Frames, source: str) -> TrackProfile:
         marking_colours_bgr=_marking_colours(got.marking_pixels),
         occlusion_usual=float(np.percentile(occ, OCCLUSION_PERCENTILE)) if occ.size else math.nan,
         floor=learn_floor(got.floor), light=LightModel(light[keep], np.sort(light_calib)), markings=markings,
+        guidance=guidance,
     )
 
 
@@ -193,6 +197,42 @@ def learnt_markings(light: Sequence[float], dark: Sequence[float]) -> str:
         return float(np.median(v)) if v.size else 0.0
 
     return "dark" if median(dark) >= median(light) + DARK_MARGIN else "light"
+
+
+@dataclass(frozen=True)
+class LaneRead:
+    """The camera lane model's reading of one analysed frame: its confidence (two lines), occlusion, the evidence behind
+    them, and where each boundary seen well this frame meets the road region's bottom row (share of the width)."""
+
+    confidence: float
+    occlusion: float
+    evidence: LaneEvidence | None
+    seen_well_at: tuple[float, ...]
+
+    @staticmethod
+    def of(a: FrameAnalysis) -> LaneRead:
+        ev, region = a.evidence, a.region
+        lines = [] if ev is None or region is None else [
+            line for line, support in ((a.left, ev.support_left), (a.right, ev.support_right))
+            if line is not None and support >= SEEN_WELL_SUPPORT]
+        at = tuple(line.u_at(region.bottom_v_px) / region.width_px for line in lines) if region is not None else ()
+        return LaneRead(a.lane_confidence, a.occlusion, ev, at)
+
+    def as_guidance(self, guidance: str) -> float:
+        return self.evidence.as_guidance(guidance) if self.evidence is not None else math.nan
+
+
+def learnt_guidance(reads: Sequence[LaneRead]) -> str:
+    """What the track guides the car by, from the recordings: one line where frames that show exactly one boundary seen
+    well outnumber those that show both ONE_LINE_RATIO times (a two-line track shows one line now and then, in a tight
+    curve: a one-line track mostly) and are at least ONE_LINE_MIN_SHARE of the frames (a lane model that hardly sees
+    the track tells nothing); a centre line where that line's median place at the bottom of the picture lies within
+    CENTRE_SHARE of the width from the middle, else one edge. Otherwise two lines (the default)."""
+    one = [r.seen_well_at[0] for r in reads if len(r.seen_well_at) == 1]
+    both = sum(len(r.seen_well_at) == 2 for r in reads)
+    if len(one) < max(ONE_LINE_MIN_SHARE * len(reads), ONE_LINE_RATIO * both, 1):
+        return "two_lines"
+    return "centre_line" if abs(float(np.median(one)) - 0.5) <= CENTRE_SHARE else "one_edge"
 
 
 def _finite(xs: Sequence[float]) -> np.ndarray:

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from fearguard.errors import FileError
-from fearguard.lane import MARKINGS
+from fearguard.lane import GUIDANCE, MARKINGS
 from fearguard.track.features import BLOCK_SIZES, block_slices, features_of, shrink
 from fearguard.track.floor import FLOOR_PX, FloorModel
 from fearguard.track.light import LIGHT_PERCENTILES, REFERENCE_MIN, LightModel, light_of, light_words
@@ -65,6 +65,7 @@ class TrackProfile:
     floor: FloorModel | None = None  # the floor's colours and where it usually is (None: the recordings showed no steady floor)
     light: LightModel | None = None  # the learnt light's shape (None: a profile learnt before it; familiarity reads layout alone)
     markings: str = "light"  # the track's markings the lane model sees it by (``lane.MARKINGS``; absent in a file: light)
+    guidance: str = "two_lines"  # what the track guides the car by (``lane.GUIDANCE``; absent in a file: two lines)
 
     @cached_property
     def reference_distance(self) -> float:
@@ -227,11 +228,15 @@ def profile_from_arrays(data: dict[str, np.ndarray], where: str) -> TrackProfile
     markings = str(data["markings"]) if "markings" in data else "light"  # profiles learnt before 2026-12-07 have none
     if markings not in MARKINGS:
         raise FileError(where, "markings", f"expected one of {', '.join(MARKINGS)}, got {markings!r}")
+    guidance = str(data["guidance"]) if "guidance" in data else "two_lines"  # none before 2026-12-07
+    if guidance not in GUIDANCE:
+        raise FileError(where, "guidance", f"expected one of {', '.join(GUIDANCE)}, got {guidance!r}")
     return TrackProfile(
         source=str(data.get("source", "")), frames_learnt=int(need("frames_learnt", 0)), mean=mean, weights=weights,
         basis=basis, bank=bank, calibration_distances=np.sort(calib), brightness_band=(float(band[0]), float(band[1])),
         lane_confidence_median=float(lane) if np.ndim(lane) == 0 and lane.dtype.kind in "fiu" else math.nan,
         marking_colours_bgr=colours, occlusion_usual=occ_usual, floor=floor, light=light, markings=markings,
+        guidance=guidance,
     )
 
 
@@ -276,7 +281,7 @@ def save_track(profile: TrackProfile, path: str | Path) -> Path:
             bank=profile.bank, calibration_distances=profile.calibration_distances,
             brightness_band=np.array(profile.brightness_band), lane_confidence_median=np.array(profile.lane_confidence_median),
             marking_colours_bgr=profile.marking_colours_bgr, occlusion_usual=np.array(profile.occlusion_usual),
-            markings=np.array(profile.markings),
+            markings=np.array(profile.markings), guidance=np.array(profile.guidance),
             **_floor_arrays(profile.floor),
             **({"light_levels": profile.light.levels, "light_calibration": profile.light.calibration} if profile.light else {}),
         )

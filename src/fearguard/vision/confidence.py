@@ -2,7 +2,9 @@
 
     confidence = mean(support_left, support_right) × geometry × agreement × visibility
 
-A side not found contributes 0 support, so one boundary alone gives at most 0.5; a side found counts the support its track
+(a track whose guidance is one line — a centre line, one edge: ``lane.GUIDANCE`` — counts its best line's support
+instead of the mean, and no pair geometry). A side not found contributes 0 support, so one boundary alone gives at
+most 0.5; a side found counts the support its track
 holds (``held``: the best of its last SUPPORT_HOLD_S, so a dashed line does not flicker as its dashes pass) in a clean
 picture, where a weaker line is sparser paint, not paint the noise hid. ``geometry`` is 1 when the
 lane width at the region's middle row and the vanishing point are plausible for a forward camera, falling linearly
@@ -43,6 +45,7 @@ class LaneEvidence:
     agreement: float
     visibility: float
     frame_support: float | None = None  # [0..1] the best side's support in this frame alone (None: the supports above are)
+    guidance: str = "two_lines"  # what the confidence measured (lane.GUIDANCE): both boundaries, or one line
 
     @property
     def guide(self) -> float:
@@ -54,6 +57,11 @@ class LaneEvidence:
         well (``paired``): a seam or a verge's edge that was never one guides nothing."""
         best = max(self.support_left, self.support_right) if self.frame_support is None else self.frame_support
         return _unit(best * self.geometry * self.agreement)
+
+    def as_guidance(self, guidance: str) -> float:
+        """The confidence these factors give for a track guided by ``guidance`` (``lane.GUIDANCE``); one line has no pair
+        geometry (a two-lines reading of a one-line evidence keeps geometry 1: it was not measured)."""
+        return _combine(self.support_left, self.support_right, self.geometry, self.agreement, self.visibility, guidance)
 
 
 def seen_rows(line: LaneLine) -> tuple[float, float] | None:
@@ -84,12 +92,13 @@ def lane_confidence(
     left: LaneLine | None, right: LaneLine | None, region: RoadRegion, agreement_left: float = 1.0, agreement_right: float = 1.0,
     occlusion: float = 0.0, clipped_share: float = 0.0, signal_to_noise: float = float("inf"), *, geometry: float | None = None,
     out_of_view: tuple[bool, bool] = (False, False), held: tuple[float, float] | None = None,
-    paired: tuple[bool, bool] = (True, True),
+    paired: tuple[bool, bool] = (True, True), guidance: str = "two_lines",
 ) -> LaneEvidence:
     """Confidence 0..1 in the ego lane's boundaries, with its factors. ``geometry``: the plausibility of the pair when
     the caller measured it in the ground plane (a bending lane, ``ground_lanes``), instead of the image lines'.
     ``out_of_view``: a missing side that the lane model places outside the picture (the inner line of a tight curve)
-    is not missing evidence — the seen side's support stands for both."""
+    is not missing evidence — the seen side's support stands for both. ``guidance``: a track guided by one line
+    (``lane.GUIDANCE``: a centre line, one edge) is seen when its best line is: that line's support, no pair geometry."""
     s_l = left.support if left is not None else 0.0
     s_r = right.support if right is not None else 0.0
     frame_support = max(s_l if paired[0] else 0.0, s_r if paired[1] else 0.0)  # the guide's: this frame's, lane sides only
@@ -101,13 +110,22 @@ def lane_confidence(
         s_l = s_r
     if right is None and out_of_view[1]:
         s_r = s_l
-    if geometry is None:
+    one_line = guidance != "two_lines"
+    if one_line:
+        geometry = 1.0  # one line has no pair to be plausible as
+    elif geometry is None:
         geometry = geometry_plausibility(left, right, region) if left is not None and right is not None else 1.0
     agree = min(agreement_left if left is not None else 1.0, agreement_right if right is not None else 1.0)
     visibility = _unit(1.0 - occlusion / OCCLUDED_BLIND) * _unit(1.0 - clipped_share / CLIPPED_BLIND)
     visibility *= 1.0 - NOISE_WEIGHT * (1.0 - _unit(signal_to_noise / SNR_ACCEPTABLE))
-    conf = 0.5 * (s_l + s_r) * geometry * agree * visibility
-    return LaneEvidence(_unit(conf), s_l, s_r, geometry, agree, visibility, _unit(frame_support))
+    conf = _combine(s_l, s_r, geometry, agree, visibility, guidance)
+    return LaneEvidence(conf, s_l, s_r, geometry, agree, visibility, _unit(frame_support), guidance)
+
+
+def _combine(s_l: float, s_r: float, geometry: float, agree: float, visibility: float, guidance: str) -> float:
+    """The confidence from its factors: the sides' mean support, or one line's (its best), × the rest."""
+    support = 0.5 * (s_l + s_r) if guidance == "two_lines" else max(s_l, s_r)
+    return _unit(support * (geometry if guidance == "two_lines" else 1.0) * agree * visibility)
 
 
 def _unit(x: float) -> float:

@@ -25,7 +25,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.lane import MARKINGS
+from fearguard.lane import GUIDANCE, MARKINGS
 from fearguard.observation import Lead, LeadBox
 from fearguard.vision.bend import Bend, trace_bend
 from fearguard.vision.confidence import LaneEvidence, agreement, lane_confidence
@@ -119,10 +119,13 @@ class FramePipeline:
 
     def __init__(
         self, camera: CameraModel | None = None, fps: float = 20.0, *, trackers: Callable[[], Trackers] = Trackers.tracking,
-        ground: GroundLaneSpec | None = None, aim_m: float | None = None, markings: str = "light",
+        ground: GroundLaneSpec | None = None, aim_m: float | None = None, markings: str = "light", guidance: str = "two_lines",
     ) -> None:
         if markings not in MARKINGS:
             raise ValueError(f"markings must be one of {', '.join(MARKINGS)}, got {markings!r}")
+        if guidance not in GUIDANCE:
+            raise ValueError(f"guidance must be one of {', '.join(GUIDANCE)}, got {guidance!r}")
+        self._guidance = guidance
         if markings != "light" and ground is not None:
             raise ValueError("the ground-plane lane model reads light paint only: give dark markings without a ground spec")
         self._markings = markings
@@ -157,6 +160,11 @@ class FramePipeline:
         """The track's markings the lanes are found by (``lane.MARKINGS``): light paint or tape, or dark tape."""
         return self._markings
 
+    @property
+    def guidance(self) -> str:
+        """What the track guides the car by (``lane.GUIDANCE``): the lane's two boundaries, or one line."""
+        return self._guidance
+
     def reset(self) -> None:
         """Forget the trackers, the lane memory and the frame count (the camera stays)."""
         self.trackers = self._new_trackers()
@@ -179,7 +187,7 @@ class FramePipeline:
         t = t_s if t_s is not None and math.isfinite(t_s) else self._frames * self.period_s
         qr = scan_qr and (self._frames - 1) % QR_EVERY_N_FRAMES == 0
         return _analyze(frame, self._camera, self.trackers, t, lead_box, qr=qr, ground=self._ground, speed_mps=speed_mps,
-                        aim_m=self._aim_m, path=path, markings=self._markings)
+                        aim_m=self._aim_m, path=path, markings=self._markings, guidance=self._guidance)
 
 
 def analyze_frame(frame_bgr: object, camera: CameraModel | None = None) -> FrameAnalysis:
@@ -423,13 +431,14 @@ def search_depth_m(camera: CameraModel, region: RoadRegion, scale: float) -> flo
     return min(far, SEARCH_DEPTH_MAX_M) if far is not None and math.isfinite(far) and far > 0 else SEARCH_DEPTH_MAX_M
 
 
-def judge_confidence(p: Prepared, lanes: Lanes, occlusion_share: float) -> LaneEvidence:
-    """lane_confidence of this frame from the accepted detections, their agreement, occlusion and clipped pixels."""
+def judge_confidence(p: Prepared, lanes: Lanes, occlusion_share: float, guidance: str = "two_lines") -> LaneEvidence:
+    """lane_confidence of this frame from the accepted detections, their agreement, occlusion and clipped pixels, for the
+    track's ``guidance`` (``lane.GUIDANCE``)."""
     clipped = p.exposure.saturated_share + p.exposure.black_share
     return lane_confidence(lanes.seen_left, lanes.seen_right, p.region, lanes.agreement_left, lanes.agreement_right,
                            occlusion_share, clipped, p.exposure.signal_to_noise,
                            geometry=lanes.ground.geometry if lanes.ground is not None else None, out_of_view=lanes.out_of_view,
-                           held=lanes.held_support, paired=lanes.paired)
+                           held=lanes.held_support, paired=lanes.paired, guidance=guidance)
 
 
 def read_qr(p: Prepared) -> tuple[str, ...]:
@@ -455,7 +464,7 @@ def steer(p: Prepared, lanes: Lanes, trackers: Trackers, ground: GroundLaneSpec 
 def _analyze(
     frame: object, camera: CameraModel | None, trackers: Trackers, t_s: float, lead_box: LeadBox | None, *, qr: bool,
     ground: GroundLaneSpec | None = None, speed_mps: float | None = None, aim_m: float | None = None, path: RoutePath | None = None,
-    markings: str = "light",
+    markings: str = "light", guidance: str = "two_lines",
 ) -> FrameAnalysis:
     """The stages in order, each timed."""
     bad = invalid_frame_reason(frame)
@@ -471,7 +480,7 @@ def _analyze(
     t2 = clock()
     seen = find_lead_and_occlusion(p, lanes, trackers, t_s, lead_box, speed_mps, path)
     t3 = clock()
-    evidence = judge_confidence(p, lanes, seen.hidden_share)
+    evidence = judge_confidence(p, lanes, seen.hidden_share, guidance)
     confidence = trackers.confidence.update(evidence.confidence)
     t4 = clock()
     payloads = read_qr(p) if qr else ()

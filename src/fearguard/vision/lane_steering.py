@@ -19,15 +19,17 @@ class HoughLaneSteering:
     ``aim_m``: the angle is the bearing of the lane centre this far ahead of the camera (a camera with a mount height;
     default: ``steering.LOOKAHEAD`` of the road region) — pure pursuit's look-ahead: nearer follows a curve more
     closely (``worlds/metadrive/preset.AIM_M``). ``markings``: the track's markings (``lane.MARKINGS``): "light" paint or
-    tape (the default), or "dark" tape on a paler floor (black electrical tape on a carpet or a mat).
+    tape (the default), or "dark" tape on a paler floor (black electrical tape on a carpet or a mat). ``guidance``: what the
+    track guides the car by (``lane.GUIDANCE``): "two_lines" (the default), or one line — "centre_line", "one_edge" —
+    whose own support is the lane confidence (the steering still aims as for a lane).
 
     No lane in view: the previous angle is kept (0 before any lane was seen); the supervisor's
     lane_confidence will be low at the same time, so it slows or stops the car.
     """
 
     def __init__(self, camera: CameraModel | None = None, fps: float = 20.0, *, ground: GroundLaneSpec | None = None,
-                 aim_m: float | None = None, markings: str = "light") -> None:
-        self._pipeline = FramePipeline(camera, fps, ground=ground, aim_m=aim_m, markings=markings)
+                 aim_m: float | None = None, markings: str = "light", guidance: str = "two_lines") -> None:
+        self._pipeline = FramePipeline(camera, fps, ground=ground, aim_m=aim_m, markings=markings, guidance=guidance)
 
     @property
     def pipeline(self) -> FramePipeline:
