@@ -125,10 +125,9 @@ class FramePipeline:
             raise ValueError(f"markings must be one of {', '.join(MARKINGS)}, got {markings!r}")
         if guidance not in GUIDANCE:
             raise ValueError(f"guidance must be one of {', '.join(GUIDANCE)}, got {guidance!r}")
-        self._guidance = guidance
         if markings != "light" and ground is not None:
             raise ValueError("the ground-plane lane model reads light paint only: give dark markings without a ground spec")
-        self._markings = markings
+        self._markings, self._guidance = markings, guidance
         self._camera = camera
         mounted = camera is not None and camera.mount_height_m is not None  # only a known height places ground distances
         self._ground = ground if mounted else None
@@ -212,8 +211,8 @@ class Prepared:
     gray: np.ndarray
     hls: np.ndarray
     exposure: Exposure  # of the road region
+    marks: np.ndarray  # the HLS image the marking finder reads (``lanes.marking_view``: ``hls`` itself for light markings)
     work: np.ndarray | None = None  # working-size BGR of the road rows, 0 elsewhere (the ground model judges paint colour on it)
-    marks: np.ndarray | None = None  # the HLS image the marking finder reads (``lanes.marking_view``; None: ``hls``)
 
 
 @dataclass(frozen=True)
@@ -292,7 +291,7 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
                          curves_px=fit.curves_px, interior=fit.interior, hls_white=fit.hls_white, white=fit.white)
     shift = far_shift_px(trackers.memory.far_centre_u_px, region)
     mask = region_toward(region, shift) if shift else p.mask  # the far edge where last frame's lane went
-    det = detect_lanes(p.hls if p.marks is None else p.marks, region, mask, trackers.lanes.current(region))
+    det = detect_lanes(p.marks, region, mask, trackers.lanes.current(region))
     width_px = trackers.memory.remember_width(det.left, det.right, v_aim, region.width_px)
     tracked = trackers.lanes.update(t_s, region, det.left, det.right)
     left = det.left if tracked.left is None or det.left is None else _with_track(det.left, tracked.left)

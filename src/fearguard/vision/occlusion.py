@@ -188,20 +188,22 @@ def floor_hue(maps: SurfaceMaps) -> float:
     coloured = sat >= COLOUR_SAT_MIN - 0.5 * SAT_DEV
     if not coloured.mean() >= FLOOR_COLOURED_SHARE:
         return math.nan
-    a = np.radians(2.0 * hue[coloured].astype(np.float64))
-    c, s = float(np.cos(a).mean()), float(np.sin(a).mean())
-    if not math.hypot(c, s) >= FLOOR_COLOURED_SHARE:
-        return math.nan
-    return (math.degrees(math.atan2(s, c)) % 360.0) / 2.0
+    mean, resultant = _circular_hue(hue[coloured].astype(np.float64))
+    return mean if resultant >= FLOOR_COLOURED_SHARE else math.nan
 
 
 def mean_hue(hues: np.ndarray) -> float:
     """Circular mean of OpenCV hues (0..180 = 0..360°), NaN ones left out; NaN when none is given."""
-    h = hues[np.isfinite(hues)]
-    if h.size == 0:
-        return math.nan
-    a = np.radians(2.0 * h)
-    return float(np.degrees(math.atan2(float(np.sin(a).sum()), float(np.cos(a).sum()))) % 360.0) / 2.0
+    return _circular_hue(hues[np.isfinite(hues)])[0]
+
+
+def _circular_hue(hues: np.ndarray) -> tuple[float, float]:
+    """Circular mean of OpenCV hues and the resultant length (0..1: how much they agree); (NaN, 0) for none."""
+    if hues.size == 0:
+        return math.nan, 0.0
+    a = np.radians(2.0 * hues)
+    c, s = float(np.cos(a).mean()), float(np.sin(a).mean())
+    return (math.degrees(math.atan2(s, c)) % 360.0) / 2.0, math.hypot(c, s)
 
 
 def hue_distance(hue: np.ndarray, reference: float) -> np.ndarray:
