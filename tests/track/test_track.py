@@ -333,3 +333,32 @@ def test_where_the_lane_model_never_saw_the_track_familiarity_is_its_guidance(ro
     assert b.lane_confidence == pytest.approx(0.5) and b.occlusion == pytest.approx(0.1)
     nan = read_as_learnt(blind, None, 0.0, 120.0, 1.0, (80.0, 180.0), 0.1)
     assert math.isnan(nan.familiarity) and math.isnan(nan.lane_confidence) and math.isnan(nan.occlusion)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.floats(1e-3, 0.499), st.floats(-0.1, 1.1), st.floats(-0.1, 1.1), st.floats(0.0, 1.0))
+def test_a_partly_seen_lane_never_rises_as_the_lane_is_lost_and_never_reads_below_half(seen, a, b, fam):
+    from fearguard.track.reading import PARTLY_SEEN, partly_seen_lane
+
+    lo, hi = partly_seen_lane(seen, min(a, b), fam, []), partly_seen_lane(seen, max(a, b), fam, [])
+    assert lo <= hi <= fam  # monotone in the lane's confidence, never above the familiarity
+    assert lo >= min(fam, PARTLY_SEEN)  # a lost lane alone is evidence, not proof: at worst "medium"
+    assert partly_seen_lane(seen, seen, fam, []) == fam  # at the recordings' median: only the familiarity speaks
+    assert math.isnan(partly_seen_lane(seen, math.nan, fam, []))  # unknown lane: the worst
+    assert math.isnan(partly_seen_lane(seen, 0.0, math.nan, []))  # unknown familiarity stays the worst
+    assert partly_seen_lane(0.0, 0.0, fam, []) == fam  # a lane model that never saw the track tells nothing
+
+
+def test_where_the_lane_model_saw_the_track_partly_losing_the_lane_lowers_the_cue_and_says_so(robocar_track, shared_data):
+    from dataclasses import replace
+
+    from fearguard.track.reading import PARTLY_SEEN, read_as_learnt
+
+    frame = _frames(shared_data / ROBOCAR, 1400, 1401, 1)[0]
+    partly = replace(robocar_track, lane_confidence_median=0.3, floor=None)
+    lost = read_as_learnt(partly, frame, 0.0, 120.0, 1.0, (80.0, 180.0), 0.1)
+    assert lost.lane_confidence == pytest.approx(min(lost.familiarity, PARTLY_SEEN)) and lost.occlusion == 0.0
+    assert any("only partly" in f for f in lost.facts)
+    assert any("reads no lower than" in f for f in lost.facts) == (lost.familiarity > PARTLY_SEEN)
+    held = read_as_learnt(partly, frame, 0.3, 120.0, 1.0, (80.0, 180.0), 0.1)
+    assert held.lane_confidence == held.familiarity and not any("reads no lower" in f for f in held.facts)
