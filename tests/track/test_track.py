@@ -279,8 +279,12 @@ def test_a_scenario_run_with_another_track_s_profile_slows_and_says_why(shared_d
     assert any("unlike the learnt track" in reason for r in runs["room"] for reason in r.get("reasons", []))
 
 
-def test_verify_holds_for_a_supervisor_that_reads_a_track(robocar_track, tmp_path, capsys):
-    path = save_track(robocar_track, tmp_path / "t.npz")
+@pytest.mark.parametrize("lane_median", [None, 0.3])  # as learnt (never seen), and a lane seen partly
+def test_verify_holds_for_a_supervisor_that_reads_a_track(robocar_track, tmp_path, capsys, lane_median):
+    from dataclasses import replace
+
+    track = robocar_track if lane_median is None else replace(robocar_track, lane_confidence_median=lane_median)
+    path = save_track(track, tmp_path / "t.npz")
     code = main(["verify", "--track", str(path), "--examples", "5", "--only", "unknown_is_worst,monotone,reachable,repeated_frames",
                  "--out", str(tmp_path / "cx")])
     printed = capsys.readouterr().out
@@ -288,16 +292,20 @@ def test_verify_holds_for_a_supervisor_that_reads_a_track(robocar_track, tmp_pat
     assert f"track {path}" in printed and "4 held, 0 failed" in printed
 
 
+@pytest.mark.parametrize("lane_median", [None, 0.3])  # as learnt (never seen), and a lane seen partly
 @settings(max_examples=80, deadline=None)
 @given(st.tuples(st.integers(0, 40), st.integers(0, 40), st.sampled_from([None, 1, 2, 3, 4, 5])),
        st.sampled_from([np.uint8, np.uint16, np.float32, np.float64, np.int64, np.bool_]),
        st.sampled_from([0.0, 1.0, 255.0, 1e300, -5.0, math.nan, math.inf]))
-def test_any_frame_with_a_track_is_an_answer_never_an_internal_error(robocar_track, shape, dtype, fill):
+def test_any_frame_with_a_track_is_an_answer_never_an_internal_error(robocar_track, lane_median, shape, dtype, fill):
+    from dataclasses import replace
+
     h, w, c = shape
     dims = (h, w) if c is None else (h, w, c)
     with np.errstate(all="ignore"):
         frame = np.full(dims, fill).astype(dtype)
-    guard = fg.FearGuard(lambda f: 0.0, track=robocar_track)
+    track = robocar_track if lane_median is None else replace(robocar_track, lane_confidence_median=lane_median)
+    guard = fg.FearGuard(lambda f: 0.0, track=track)
     for k in range(3):
         cmd = guard.step(fg.Observation(t_s=0.05 * k, speed_mps=0.5, frame=frame))
         assert not any("internal error" in r for r in cmd.reasons), cmd.reasons
