@@ -36,9 +36,9 @@ def read_as_learnt(profile: TrackProfile, frame: object, lane_confidence: float,
     confidence relative to what the camera's lane model reads on this track — or, where it did not see this track's
     guidance on most recorded frames, how like the learnt track the picture is, lowered where it saw the guidance partly
     and loses it now (``partly_seen_lane``; the camera's occlusion, measured over that model's marking region, then does
-    not apply and reads 0); otherwise the occlusion
-    relative to what normal driving on this track showed (``TrackProfile.occlusion_as_learnt``). With a floor model, the
-    occlusion is at least the share of the usual floor hidden, read against the recordings (``floor_hidden``)."""
+    not apply and reads 0); otherwise the occlusion relative to what normal driving on this track showed
+    (``TrackProfile.occlusion_as_learnt``). With a floor model, the occlusion is at least the share of the usual floor
+    hidden, read against the recordings (``floor_hidden``)."""
     fam, why = profile.familiarity(frame)
     facts = [why] if why else []
     lo, hi = profile.brightness_band
