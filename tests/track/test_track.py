@@ -4,6 +4,7 @@ what is unlike the recordings, the light read against the learnt band — and ev
 from __future__ import annotations
 
 import io
+import itertools
 import math
 from pathlib import Path
 
@@ -18,7 +19,7 @@ from fearguard.cli import main
 from fearguard.errors import FileError
 from fearguard.track.features import frame_features
 from fearguard.track.learn import LearnOptions, learn_track
-from fearguard.track.profile import UNFAMILIAR_RATIO, load_track, profile_from_arrays, save_track
+from fearguard.track.profile import FAMILIAR_AT_REFERENCE, UNFAMILIAR_RATIO, load_track, profile_from_arrays, save_track
 
 ROBOCAR = "modelcar/robocar-ucsd-window/images"  # glass walls, a bright window: 160×120 images, 20 fps
 DEEPPICAR = "modelcar/deeppicar-tape/video01.avi"  # a PiCar on tape, 320×240 video
@@ -67,10 +68,28 @@ def test_familiarity_never_rises_with_distance_and_stays_in_0_1(robocar_track, a
     assert 0.0 <= fb <= fa <= 1.0
 
 
-def test_familiarity_is_1_within_the_reference_and_0_from_the_unfamiliar_ratio(robocar_track):
-    ref = robocar_track.reference_distance
-    assert robocar_track.familiarity_of(ref) == 1.0 and robocar_track.familiarity_of(UNFAMILIAR_RATIO * ref) == 0.0
+def test_familiarity_is_1_for_the_typical_frame_graded_to_the_reference_and_0_from_the_unfamiliar_ratio(robocar_track):
+    typ, ref = robocar_track.typical_distance, robocar_track.reference_distance
+    assert 0.0 < typ < ref
+    assert robocar_track.familiarity_of(0.5 * typ) == robocar_track.familiarity_of(typ) == 1.0
+    assert 1.0 > robocar_track.familiarity_of(0.5 * (typ + ref)) > FAMILIAR_AT_REFERENCE
+    assert robocar_track.familiarity_of(ref) == pytest.approx(FAMILIAR_AT_REFERENCE)
+    assert robocar_track.familiarity_of(UNFAMILIAR_RATIO * ref) == 0.0
     assert math.isnan(robocar_track.familiarity_of(math.nan))
+
+
+@pytest.mark.parametrize("rules", ["default.toml", "duckiebot.toml", "road_car.toml"])
+def test_calm_frames_less_typical_than_the_median_read_more_fear_but_stay_normal(robocar_track, rules):
+    """Between the typical recorded frame and d_ref the fear orders the frames (what a replay's fear curve and an
+    AUROC of fear need), and every one of them stays below caution."""
+    from fearguard.fuzzy.loader import bundled_rules_path, load_rules
+
+    rb = load_rules(bundled_rules_path(rules))
+    typ, ref = robocar_track.typical_distance, robocar_track.reference_distance
+    fears = [rb.engine.evaluate([1.0, 128.0, 0.0, math.inf, 0.0, robocar_track.familiarity_of(d)]).fear
+             for d in np.linspace(typ, ref, 6)]
+    assert all(a < b for a, b in itertools.pairwise(fears)), fears
+    assert fears[-1] < rb.policy.caution_fear
 
 
 @settings(max_examples=200, deadline=None)

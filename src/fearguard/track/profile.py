@@ -9,11 +9,13 @@ on the learnt principal components plus the length of what the components do not
 ``NEIGHBOURS`` nearest learnt frames is ``d``. The learning calibrated ``d`` on the recordings themselves: each
 calibration frame against the learnt frames more than ``CALIBRATION_GAP_S`` away in time (a frame's own neighbours in
 time would make everything look familiar). With ``d_ref`` the ``REFERENCE_PERCENTILE``-th percentile of those
-distances::
+distances and ``d_typ`` their median, familiarity is piecewise linear in ``d``::
 
-    familiarity = clip((UNFAMILIAR_RATIO − d / d_ref) / (UNFAMILIAR_RATIO − 1), 0, 1)
+    1 up to d_typ (as familiar as the typical recorded frame), FAMILIAR_AT_REFERENCE at d_ref (as familiar as 95 % of
+    the recordings), 0 from UNFAMILIAR_RATIO · d_ref
 
-1 up to ``d_ref`` (as familiar as 95 % of the recordings), 0.5 half-way, 0 from ``UNFAMILIAR_RATIO · d_ref``.
+Graded below ``d_ref`` so that the fear still orders frames the rule files call familiar (their "familiar" term rises
+from 0.6 to 1): among calm frames, the less typical ones read a little more fear, never enough to slow the car.
 The frame's light (``light.py``: the shape of its grey levels) is read the same way against the learnt frames' light,
 and the cue is the lower of the two: lights switched off in a room whose own frames include a dark floor below a bright
 window are unlike its light, however like its layout.
@@ -40,6 +42,8 @@ VERSION = 1
 NEIGHBOURS = 3  # [frames] a new frame's distance is the mean to this many nearest learnt frames (one odd frame is no track)
 REFERENCE_PERCENTILE = 95.0  # [%] of the recordings' own distances: up to here a frame is fully familiar
 UNFAMILIAR_RATIO = 2.0  # [-] d / d_ref at which familiarity reaches 0 (unfamiliar)
+FAMILIAR_AT_REFERENCE = 0.9  # [0..1] familiarity at d_ref: inside the rule files' "familiar" term (fear very low), below 1
+#                              so that frames between the typical one and d_ref are graded (module docstring)
 CALIBRATION_GAP_S = 2.0  # [s] a calibration frame is compared only with learnt frames further away in time than this
 BAND_PERCENTILES = (2.0, 98.0)  # [%] of the recordings' brightness: the learnt normal light
 OCCLUSION_PERCENTILE = 90.0  # [%] of the recordings' occlusion cue: as much of the marking region as normal driving hides
@@ -73,6 +77,11 @@ class TrackProfile:
         return float(np.percentile(self.calibration_distances, REFERENCE_PERCENTILE))
 
     @cached_property
+    def typical_distance(self) -> float:
+        """d_typ: the median of the recordings' own distances (module docstring)."""
+        return float(np.median(self.calibration_distances))
+
+    @cached_property
     def light_reference(self) -> float:
         """The light's d_ref: the same percentile of its own distances, never below ``light.REFERENCE_MIN`` (NaN: no light)."""
         if self.light is None:
@@ -92,7 +101,7 @@ class TrackProfile:
 
     def familiarity_of(self, distance: float) -> float:
         """The cue for a distance (module docstring); NaN stays NaN (unknown = worst)."""
-        return familiarity_from(distance, self.reference_distance)
+        return familiarity_from(distance, self.reference_distance, self.typical_distance)
 
     def percentile_of(self, distance: float) -> float:
         """[%] of the recordings' own distances below this one (100: beyond every learnt frame)."""
@@ -165,12 +174,20 @@ def nearest_mean(bank: np.ndarray, q: np.ndarray) -> float:
     return float(np.sqrt(np.partition(d2, k - 1)[:k]).mean())
 
 
-def familiarity_from(distance: float, reference: float) -> float:
-    """1 up to the reference distance, 0 from ``UNFAMILIAR_RATIO`` times it, linear between; NaN stays NaN (worst)."""
+def familiarity_from(distance: float, reference: float, typical: float | None = None) -> float:
+    """1 up to the typical distance, ``FAMILIAR_AT_REFERENCE`` at the reference, 0 from ``UNFAMILIAR_RATIO`` times it,
+    linear between (without a typical distance: 1 up to the reference, then linear to 0); NaN stays NaN (worst)."""
     if not math.isfinite(distance):
         return math.nan
     ratio = distance / max(reference, 1e-12)
-    return float(np.clip((UNFAMILIAR_RATIO - ratio) / (UNFAMILIAR_RATIO - 1.0), 0.0, 1.0))
+    if typical is None:
+        return float(np.clip((UNFAMILIAR_RATIO - ratio) / (UNFAMILIAR_RATIO - 1.0), 0.0, 1.0))
+    if ratio >= 1.0:
+        return float(max(0.0, FAMILIAR_AT_REFERENCE * (UNFAMILIAR_RATIO - ratio) / (UNFAMILIAR_RATIO - 1.0)))
+    typ = min(typical / max(reference, 1e-12), 1.0)
+    if ratio <= typ:
+        return 1.0
+    return float(1.0 - (1.0 - FAMILIAR_AT_REFERENCE) * (ratio - typ) / (1.0 - typ))
 
 
 def load_track(path: str | Path) -> TrackProfile:
