@@ -19,7 +19,14 @@ from fearguard.cli import main
 from fearguard.errors import FileError
 from fearguard.track.features import frame_features
 from fearguard.track.learn import LearnOptions, learn_track
-from fearguard.track.profile import FAMILIAR_AT_REFERENCE, UNFAMILIAR_RATIO, load_track, profile_from_arrays, save_track
+from fearguard.track.profile import (
+    FAMILIAR_AT_REFERENCE,
+    UNFAMILIAR_RATIO,
+    familiarity_from,
+    load_track,
+    profile_from_arrays,
+    save_track,
+)
 
 ROBOCAR = "modelcar/robocar-ucsd-window/images"  # glass walls, a bright window: 160×120 images, 20 fps
 DEEPPICAR = "modelcar/deeppicar-tape/video01.avi"  # a PiCar on tape, 320×240 video
@@ -76,6 +83,22 @@ def test_familiarity_is_1_for_the_typical_frame_graded_to_the_reference_and_0_fr
     assert robocar_track.familiarity_of(ref) == pytest.approx(FAMILIAR_AT_REFERENCE)
     assert robocar_track.familiarity_of(UNFAMILIAR_RATIO * ref) == 0.0
     assert math.isnan(robocar_track.familiarity_of(math.nan))
+
+
+distances = st.floats(0.0, 1e6, allow_nan=False)
+
+
+@settings(max_examples=300, deadline=None)
+@given(distances, distances, st.floats(0.0, 1e3), st.floats(0.0, 1e3))
+def test_familiarity_from_any_calibration_never_rises_with_distance(a, b, typical, reference):
+    """Whatever the recordings' own distances (a typical distance at, above or below the reference, zeros), a farther
+    frame is never more familiar, the cue stays in 0..1, a frame as near as the typical one is fully familiar, and an
+    unknown distance stays unknown (the worst)."""
+    near, far = min(a, b), max(a, b)
+    f_near, f_far = familiarity_from(near, reference, typical), familiarity_from(far, reference, typical)
+    assert 0.0 <= f_far <= f_near <= 1.0
+    assert familiarity_from(min(typical, reference) * 0.999, reference, typical) == 1.0
+    assert math.isnan(familiarity_from(math.nan, reference, typical))
 
 
 @pytest.mark.parametrize("rules", ["default.toml", "duckiebot.toml", "road_car.toml"])
