@@ -198,7 +198,8 @@ def _arrays(track: fg.TrackProfile, tmp_path: Path) -> dict[str, np.ndarray]:
 
 
 @pytest.mark.parametrize(("key", "value", "says"), [
-    ("format", np.array("something-else"), "format"), ("version", np.array(99), "version"), ("bank", None, "bank"),
+    ("format", np.array("something-else"), "format"), ("version", np.array(99), "version"),
+    ("version", np.array(1), "version"), ("bank", None, "bank"),
     ("mean", np.zeros(3), "mean"), ("calibration_distances", np.array([np.nan]), "calibration_distances"),
     ("brightness_band", np.array([200.0, 100.0]), "brightness_band"), ("basis", np.array(["a", "b"]), "basis"),
     ("light_levels", None, "light_levels"), ("light_levels", np.zeros((3, 3)), "light_levels"),
@@ -274,6 +275,28 @@ def test_frame_features_refuse_what_is_not_a_picture_and_take_any_picture():
     for img in (np.zeros((120, 160), np.uint8), np.full((480, 640, 4), 200, np.uint8), np.random.default_rng(3).random((9, 13, 3))):
         f = frame_features(img)
         assert f is not None and np.all(np.isfinite(f))
+
+
+@pytest.mark.parametrize("horizontal", [True, False])
+def test_motion_blur_lowers_the_detail_block_on_every_shared_source(shared_data, horizontal):
+    """The detail block (the fine gradient, and its ratio to the shrunk picture's) falls as a motion blur grows, on a
+    glossy mat (robocar), dark carpet (a Donkey tub) and a wooden floor (a 320×240 PiCar video), along or across."""
+    from fearguard.replay.recordings import open_recording
+
+    frames = [cv2.imread(str(shared_data / ROBOCAR / "1400_cam_image_array_.jpg")),
+              cv2.imread(str(shared_data / TUB / "images" / "1400_cam_image_array_.jpg")),
+              next(iter(open_recording(shared_data / DEEPPICAR, None).iter_frames(50, 51, 1))).image_bgr]
+    for img in frames:
+        details = []
+        for n in (1, 3, 7, 15):
+            kernel = np.zeros((n, n), np.float32)
+            if horizontal:
+                kernel[n // 2, :] = 1.0 / n
+            else:
+                kernel[:, n // 2] = 1.0 / n
+            f = frame_features(cv2.filter2D(img, -1, kernel))
+            details.append((f[-2], f[-1]))
+        assert all(a[0] > b[0] and a[1] > b[1] for a, b in itertools.pairwise(details)), details
 
 
 def test_learn_and_replay_from_the_command_line(shared_data, tmp_path, capsys):

@@ -38,7 +38,7 @@ from fearguard.track.floor import FLOOR_PX, FloorModel
 from fearguard.track.light import LIGHT_PERCENTILES, REFERENCE_MIN, LightModel, light_of, light_words
 
 FORMAT = "fearguard-track"
-VERSION = 1
+VERSION = 2  # 2: the detail block (features.py); a version-1 file has 207 features and is refused (relearn)
 NEIGHBOURS = 3  # [frames] a new frame's distance is the mean to this many nearest learnt frames (one odd frame is no track)
 REFERENCE_PERCENTILE = 95.0  # [%] of the recordings' own distances: up to here a frame is fully familiar
 UNFAMILIAR_RATIO = 2.0  # [-] d / d_ref at which familiarity reaches 0 (unfamiliar)
@@ -58,7 +58,7 @@ class TrackProfile:
     source: str  # what it was learnt from (paths), for the reasons and the picture
     frames_learnt: int  # frames whose features were learnt
     mean: np.ndarray  # (F,) feature mean of the learnt frames
-    weights: np.ndarray  # (F,) per-feature weight: each block (layout, colour, edges) counts alike
+    weights: np.ndarray  # (F,) per-feature weight: each block (layout, colour, edges, detail) counts alike
     basis: np.ndarray  # (k, F) principal components of the weighted features (rows, orthonormal)
     bank: np.ndarray  # (M, k + 1) learnt frames: projections and the unexplained length
     calibration_distances: np.ndarray  # (C,) sorted: the recordings' own distances (see the module docstring)
