@@ -441,7 +441,7 @@ def cmd_learn(args: argparse.Namespace) -> int:
     from fearguard.track.learn import LearnOptions, learn_track
     from fearguard.track.light import LIGHT_PERCENTILES, grey_levels
     from fearguard.track.picture import draw_track
-    from fearguard.track.profile import save_track
+    from fearguard.track.profile import FAMILIAR_AT_REFERENCE, REFERENCE_PERCENTILE, UNFAMILIAR_RATIO, save_track
 
     options = LearnOptions(fps=args.fps, start=args.from_, stop=args.to, every=args.every,
                            camera=load_camera(args.camera) if args.camera else None)
@@ -467,8 +467,9 @@ def cmd_learn(args: argparse.Namespace) -> int:
     print("  floor: none learnt" if floor is None else
           f"  floor: {len(floor.colours_lab)} colours, usually seen on {float((floor.usual >= USUAL_SHARE).mean()):.0%} of the "
           f"picture, {floor.hidden_usual:.2f} of it hidden on a typical frame")
-    print(f"  familiarity: {p.bank.shape[0]} frames kept, {p.basis.shape[0]} components, reference distance "
-          f"{p.reference_distance:.3f}")
+    print(f"  familiarity: {p.bank.shape[0]} frames kept, {p.basis.shape[0]} components; fully familiar up to distance "
+          f"{p.typical_distance:.3f} (the typical recorded frame), {FAMILIAR_AT_REFERENCE:.1f} at {p.reference_distance:.3f} "
+          f"(the recordings' {REFERENCE_PERCENTILE:g}th percentile), 0 from {UNFAMILIAR_RATIO * p.reference_distance:.3f}")
     print(f"wrote {out} and {picture}")
     return 0
 
