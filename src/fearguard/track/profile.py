@@ -16,9 +16,10 @@ distances and ``d_typ`` their median, familiarity is piecewise linear in ``d``::
 
 Graded below ``d_ref`` so that the fear still orders frames the rule files call familiar (their "familiar" term rises
 from 0.6 to 1): among calm frames, the less typical ones read a little more fear, never enough to slow the car.
-The frame's light (``light.py``: the shape of its grey levels) is read the same way against the learnt frames' light,
-and the cue is the lower of the two: lights switched off in a room whose own frames include a dark floor below a bright
-window are unlike its light, however like its layout.
+The frame's light (``light.py``: the shape of its grey levels) is read against the learnt frames' light the same way
+but without the grading (1 up to its own reference, 0 from twice it), and the cue is the lower of the two: lights
+switched off in a room whose own frames include a dark floor below a bright window are unlike its light, however like
+its layout.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ from fearguard.track.light import LIGHT_PERCENTILES, REFERENCE_MIN, LightModel, 
 FORMAT = "fearguard-track"
 VERSION = 2  # 2: the detail block (features.py); a version-1 file has 207 features and is refused (relearn)
 NEIGHBOURS = 3  # [frames] a new frame's distance is the mean to this many nearest learnt frames (one odd frame is no track)
-REFERENCE_PERCENTILE = 95.0  # [%] of the recordings' own distances: up to here a frame is fully familiar
+REFERENCE_PERCENTILE = 95.0  # [%] of the recordings' own distances: d_ref, where familiarity reads FAMILIAR_AT_REFERENCE
 UNFAMILIAR_RATIO = 2.0  # [-] d / d_ref at which familiarity reaches 0 (unfamiliar)
 FAMILIAR_AT_REFERENCE = 0.9  # [0..1] familiarity at d_ref: inside the rule files' "familiar" term (fear very low), below 1
 #                              so that frames between the typical one and d_ref are graded (module docstring)
