@@ -281,11 +281,9 @@ def test_frame_features_refuse_what_is_not_a_picture_and_take_any_picture():
 def test_motion_blur_lowers_the_detail_block_on_every_shared_source(shared_data, horizontal):
     """The detail block (the fine gradient, and its ratio to the shrunk picture's) falls as a motion blur grows, on a
     glossy mat (robocar), dark carpet (a Donkey tub) and a wooden floor (a 320×240 PiCar video), along or across."""
-    from fearguard.replay.recordings import open_recording
-
     frames = [cv2.imread(str(shared_data / ROBOCAR / "1400_cam_image_array_.jpg")),
               cv2.imread(str(shared_data / TUB / "images" / "1400_cam_image_array_.jpg")),
-              next(iter(open_recording(shared_data / DEEPPICAR, None).iter_frames(50, 51, 1))).image_bgr]
+              _frames(shared_data / DEEPPICAR, 50, 51, 1)[0]]
     for img in frames:
         details = []
         for n in (1, 3, 7, 15):

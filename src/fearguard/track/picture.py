@@ -11,7 +11,7 @@ import numpy as np
 
 from fearguard.track.floor import USUAL_SHARE
 from fearguard.track.learn import Learnt
-from fearguard.track.profile import FAMILIAR_AT_REFERENCE, UNFAMILIAR_RATIO
+from fearguard.track.profile import FAMILIAR_AT_REFERENCE, UNFAMILIAR_RATIO, ratio_at
 
 
 def draw_track(learnt: Learnt, path: str | Path) -> Path:
@@ -61,8 +61,7 @@ def draw_track(learnt: Learnt, path: str | Path) -> Path:
     ax.hist(c / ref, bins=60, color="steelblue", range=(0, max(UNFAMILIAR_RATIO * 1.2, float(c.max() / ref))))
     ax.axvline(p.typical_distance / ref, color="green", label="fully familiar up to here (the typical recorded frame)")
     ax.axvline(1.0, color="orange", label=f"familiarity {FAMILIAR_AT_REFERENCE:.1f} (reference percentile)")
-    half = 1.0 + (FAMILIAR_AT_REFERENCE - 0.5) / FAMILIAR_AT_REFERENCE * (UNFAMILIAR_RATIO - 1.0)
-    ax.axvline(half, color="darkorange", ls="--", label="half-familiar (0.5)")
+    ax.axvline(ratio_at(0.5), color="darkorange", ls="--", label="half-familiar (0.5)")
     ax.axvline(UNFAMILIAR_RATIO, color="crimson", label="unfamiliar (0)")
     ax.set_xlabel("distance to the learnt frames / reference distance (the recordings' own, more than 2 s apart)", fontsize=8)
     ax.legend(fontsize=7)

@@ -191,6 +191,12 @@ def familiarity_from(distance: float, reference: float, typical: float | None = 
     return float(1.0 - (1.0 - FAMILIAR_AT_REFERENCE) * (ratio - typ) / (1.0 - typ))
 
 
+def ratio_at(familiarity: float) -> float:
+    """d / d_ref at which a familiarity at or below ``FAMILIAR_AT_REFERENCE`` is read (``familiarity_from``'s line beyond
+    the reference, inverted: the picture marks its levels)."""
+    return UNFAMILIAR_RATIO - familiarity / FAMILIAR_AT_REFERENCE * (UNFAMILIAR_RATIO - 1.0)
+
+
 def load_track(path: str | Path) -> TrackProfile:
     """A profile written by ``fearguard learn``; a wrong file is a ``FileError`` naming the file and the key."""
     p = Path(path)
