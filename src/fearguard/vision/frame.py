@@ -288,7 +288,8 @@ def find_lanes(p: Prepared, trackers: Trackers, t_s: float, ground: GroundLaneSp
             return Lanes(left=fit.left, right=fit.right, seen_left=fit.left, seen_right=fit.right, agreement_left=fit.agreement[0],
                          agreement_right=fit.agreement[1], features=fit.features, paint_integral=fit.paint_integral, aim_row_px=v_aim,
                          lane_width_px=width_px, ground=fit.lanes, out_of_view=fit.out_of_view, expected=fit.expected,
-                         curves_px=fit.curves_px, interior=fit.interior, hls_white=fit.hls_white, white=fit.white)
+                         curves_px=fit.curves_px, interior=fit.interior, hls_white=fit.hls_white, white=fit.white,
+                         held_support=fit.lanes.held)
     shift = far_shift_px(trackers.memory.far_centre_u_px, region)
     mask = region_toward(region, shift) if shift else p.mask  # the far edge where last frame's lane went
     det = detect_lanes(p.marks, region, mask, trackers.lanes.current(region))

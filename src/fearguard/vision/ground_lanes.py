@@ -29,7 +29,7 @@ import cv2
 import numpy as np
 
 from fearguard.camera import CameraModel
-from fearguard.vision.lane_tracker import LOST_AFTER_S
+from fearguard.vision.lane_tracker import LOST_AFTER_S, SUPPORT_HOLD_S
 from fearguard.vision.lanes import RIDGE_MIN, YELLOW_SAT_MIN, LaneLine, RoadRegion, smoothed_light
 from fearguard.vision.medians import median
 from fearguard.vision.obstacle import INSET
@@ -69,6 +69,14 @@ WIDTH_FRAMES = 40  # [frames] a measured lane width is the median of the last th
 WIDTH_MIN_FRAMES = 5  # [frames] ... once there are this many
 YELLOW_TRACK_FRAMES = 5  # [frames] a yellow left boundary found in this many frames makes the track one with a yellow centre
 #   line (a yellow object read as one in a frame or two does not)
+COAST_SUPPORT_MIN = 0.5  # [-] a side whose held support is less is not coasted through a miss (``coast``)
+FLANK_M = (0.07, 0.1)  # [m] beyond a boundary (its tape's inner edge), away from the lane: past any tape (Duckietown's 5 cm
+#   wide, the widest), road again (at the spec's scale)
+FLANK_FILLED = 0.5  # [-] share of the flank's samples that are paint at every offset: the edge of a wide bright patch
+FLANK_MIN_SAMPLES = 5  # [-] fewer flank samples in view than this tell nothing
+RESOLVED_SPAN = 0.5  # [-] of the fit range: a boundary seen over less whose arc stays within the inlier band of its chord
+#   is a line (``_resolved``)
+JUMP_AGREEMENT = 0.5  # [-] a side found with less agreement with its prior than this is another line: its hold starts afresh
 WIDTH_RANGE = (0.5, 2.0)  # [-] of the assumed width: a two-sided fit measuring a width outside is no measurement of this lane
 
 
@@ -179,6 +187,12 @@ class GroundLanes:
     light_split: float | None = None  # the split between the paints in b that went with them (paint_light.Light.white_b_min)
     width_m: float = math.nan  # [m] the lane width both boundaries measure (NaN: not both found)
     yellow_left: bool = False  # the left boundary is yellow paint (as a prior: the track has a yellow centre line)
+    held: tuple[float, float] = (0.0, 0.0)  # [0..1] each side's best support over the last SUPPORT_HOLD_S (as priors: what
+    #   GroundMemory holds; in a fit: with this frame's, faded on a coasted side — ``coast``)
+    coasted: tuple[bool, bool] = (False, False)  # a side not found this frame, held from its last sighting (``coast``)
+    unseen_s: tuple[float, float] = (math.inf, math.inf)  # [s] (as priors) since each side was last found
+    agreement: tuple[float, float] = (1.0, 1.0)  # [0..1] (in a fit) each side found against its prior (``agreement``): below
+    #   JUMP_AGREEMENT another line than the one held, whose hold starts afresh
 
 
 @dataclass(frozen=True)
@@ -430,12 +444,32 @@ def fit_boundary(x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, prior: Grou
     # unless it loses the consensus the hypothesis found
     refit = _refit(x[inlier], y[inlier])
     if refit is not None and 2.0 * abs(refit[0]) <= max_curvature:
+        refit = _resolved(refit, x[inlier], y[inlier], inlier_m, spec)
         refined = np.abs(_distance(refit, x, y)) <= inlier_m
         if refined @ weight >= REFIT_KEEP * (inlier @ weight) and _starts_along(refit, x[refined], y[refined]):
             return _oriented(refit, x[refined], y[refined], spec)
+    best = _resolved(best, x[inlier], y[inlier], inlier_m, spec)
     if not _starts_along(best, x[inlier], y[inlier]):
         return None  # its inliers start elsewhere than its three points: the curve runs across the lane there
     return _oriented(best, x[inlier], y[inlier], spec)
+
+
+def _resolved(v: np.ndarray, x: np.ndarray, y: np.ndarray, inlier_m: float, spec: GroundLaneSpec) -> np.ndarray:
+    """The curve (4,), or the straight line through its points (x, y) when they cannot tell it from one: seen over less
+    than RESOLVED_SPAN of the fit range, with the arc straying from its chord over that span (the sagitta, span² ·
+    curvature / 8) by less than the inlier band — the curvature is then the tape's width and the noise, not the
+    road's. One short dash (its near end's pixels an edge too) fitted as a circle of radius 0.19-0.24 m beside a
+    straight solid line in the simulator, and the lane followed beyond the dash crossed the road; a curve's inner
+    tape, seen over 0.23 m of a Duckiebot's 0.43 m with the same small sagitta, is a curve (its span says so)."""
+    if abs(v[0]) <= STRAIGHT or len(x) < 2:
+        return v
+    span = float(np.max(np.hypot(x - x[int(np.argmin(x))], y - y[int(np.argmin(x))])))
+    if span >= RESOLVED_SPAN * (spec.far_m - spec.near_m) or span * span * 2.0 * abs(v[0]) / 8.0 >= inlier_m:
+        return v
+    mx, my = float(x.mean()), float(y.mean())
+    _, _, vt = np.linalg.svd(np.stack([x - mx, y - my], axis=1), full_matrices=False)
+    nx, ny = vt[-1]  # the unit normal of the total-least-squares line (b² + c² = 1, a = 0: Pratt-normalised)
+    return np.array([0.0, nx, ny, -(nx * mx + ny * my)])
 
 
 def _runs_along(curves: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -492,6 +526,9 @@ def detect_ground_lanes(
         right = _beside(fit_boundary(wx, wy, spec, priors[1], seed=2), spec, left_side=False)
         if right is None and priors[1] is not None:  # the prior lost the line (a jump): search afresh
             right = _beside(fit_boundary(wx, wy, spec, None, seed=3), spec, left_side=False)
+    left = None if left is not None and _edge_of_wide_paint(left, yellow if yellow_path else white, grid, bottom_v_px, spec,
+                                                             outward_left=True) else left
+    right = None if right is not None and _edge_of_wide_paint(right, white, grid, bottom_v_px, spec, outward_left=False) else right
     geometry, width = 1.0, math.nan
     if left is not None and right is not None:
         near = right.samples()[: max(2, int(spec.metres(0.25) / STEP_M))]
@@ -500,6 +537,38 @@ def detect_ground_lanes(
         lo, hi = WIDTH_TOLERANCE
         geometry = float(min(1.0, max(0.0, (hi - error) / (hi - lo))))
     return GroundLanes(left, right, geometry, len(x), width_m=width, yellow_left=left is not None and yellow_path)
+
+
+def _edge_of_wide_paint(boundary: GroundBoundary, paint: np.ndarray, grid: GroundGrid, bottom_v_px: int, spec: GroundLaneSpec,
+                        *, outward_left: bool) -> bool:
+    """Whether a boundary fitted to paint edges is the edge of a bright patch far wider than any tape: along the span
+    its markings were seen, the ground FLANK_M beyond it, away from the lane (left of a left boundary), is paint on at
+    least FLANK_FILLED of the samples at every offset. A tape is road again past its width; a sunlit gap between two
+    tree shadows passes the paint test (brighter than the shade round it by more than tape is than the mat) and its
+    edge runs as smoothly as a line — fitted, it bent the lane off the road. Unknown (too little of the flank in view):
+    not wide."""
+    pts = boundary.samples()
+    g = np.stack([2.0 * boundary.a * pts[:, 0] + boundary.b, 2.0 * boundary.a * pts[:, 1] + boundary.c], axis=1)
+    normal = g / np.maximum(np.hypot(g[:, 0], g[:, 1]), 1e-12)[:, None]  # toward + (left of the way away from the camera)
+    sign = 1.0 if outward_left else -1.0
+    for d in FLANK_M:
+        q = pts + sign * spec.metres(d) * normal
+        hit, seen = paint_at(paint, grid, bottom_v_px, q[:, 0], q[:, 1])
+        if seen.sum() < FLANK_MIN_SAMPLES or hit[seen].mean() < FLANK_FILLED:
+            return False
+    return True
+
+
+def paint_at(paint: np.ndarray, grid: GroundGrid, bottom_v_px: int, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(paint, in view) at ground points: the mask's pixel on the grid row nearest each point's range."""
+    xs = grid.x_m  # decreasing from the grid's top row down
+    rows = np.clip(np.searchsorted(-xs, -x), 0, len(xs) - 1)
+    u = np.rint(grid.cx_px - y / grid.lateral_m_per_px[rows]).astype(np.int64)
+    v = rows + grid.top_v_px
+    seen = (u >= 0) & (u < paint.shape[1]) & (v <= bottom_v_px) & (x <= xs[0]) & (x >= xs[-1])
+    hit = np.zeros(len(x), bool)
+    hit[seen] = paint[v[seen], u[seen]] > 0
+    return hit, seen
 
 
 def _across(found: GroundBoundary, x: np.ndarray, y: np.ndarray, spec: GroundLaneSpec, *, left_side: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -599,11 +668,15 @@ class GroundMemory:
         self._split: float | None = None
         self._widths: deque[float] = deque(maxlen=WIDTH_FRAMES)
         self._yellow_frames = 0
+        self._supports: tuple[deque[tuple[float, float]], deque[tuple[float, float]]] = (deque(), deque())
 
     def priors(self, t_s: float) -> GroundLanes | None:
         kept = [b if b is not None and t_s - b[0] <= LOST_AFTER_S else None for b in self._last]
+        held = tuple(max((s for t, s in seen if 0.0 <= t_s - t <= SUPPORT_HOLD_S), default=0.0) for seen in self._supports)
+        unseen = tuple(t_s - b[0] if b is not None else math.inf for b in kept)
         return GroundLanes(kept[0][1] if kept[0] else None, kept[1][1] if kept[1] else None, 1.0, 0, self._gains, self._split,
-                           yellow_left=self._yellow_frames >= YELLOW_TRACK_FRAMES)
+                           yellow_left=self._yellow_frames >= YELLOW_TRACK_FRAMES, held=(held[0], held[1]),
+                           unseen_s=(unseen[0], unseen[1]))
 
     def spec_now(self, spec: GroundLaneSpec) -> GroundLaneSpec:
         """The spec with the lane width measured so far: the median of the remembered widths within WIDTH_RANGE of the
@@ -616,9 +689,16 @@ class GroundMemory:
         return replace(spec, lane_width_m=float(median(widths))) if len(widths) >= WIDTH_MIN_FRAMES else spec
 
     def remember(self, t_s: float, lanes: GroundLanes) -> None:
+        """This frame's fit: its boundaries found (a coasted one is no new sighting), their supports, light and width."""
         for i, b in enumerate((lanes.left, lanes.right)):
-            if b is not None:
+            seen = self._supports[i]
+            while seen and not 0.0 <= t_s - seen[0][0] <= SUPPORT_HOLD_S:  # too old (or time went back: a new run)
+                seen.popleft()
+            if b is not None and not lanes.coasted[i]:
+                if lanes.agreement[i] < JUMP_AGREEMENT:
+                    seen.clear()  # another line than the one held: what that one showed vouches nothing for this one
                 self._last[i] = (t_s, b)
+                seen.append((t_s, b.support))
         if lanes.light_gains is not None:
             self._gains, self._split = lanes.light_gains, lanes.light_split
         self._yellow_frames += lanes.yellow_left
@@ -664,18 +744,59 @@ def ground_lanes_in_image(
     features = cv2.bitwise_or(white, yellow)
     centre = spec.yellow_centre if spec.yellow_centre is not None else before.yellow_left
     lanes = detect_ground_lanes(white, yellow, grid, region.bottom_v_px, spec, (before.left, before.right), centre)
+    lanes = replace(lanes, agreement=(agreement(lanes.left, before.left, spec), agreement(lanes.right, before.right, spec)))
+    hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid, spec),
+              lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid, spec))
+    lanes = coast(lanes, before, spec)
     if gains is not None:
         lanes = replace(lanes, light_gains=(float(gains[0]), float(gains[1]), float(gains[2])), light_split=split_b)
     band = slice(region.top_v_px, region.bottom_v_px + 1)
     integral = cv2.integral((features[band] > 0).view(np.uint8), sdepth=cv2.CV_64F)
     left, right = (_image_chord(b, cam, spec) for b in (lanes.left, lanes.right))
-    agree = (agreement(lanes.left, before.left, spec), agreement(lanes.right, before.right, spec))
-    hidden = (lanes.left is None and lanes.right is not None and not _in_view(lanes.right.offset(spec.lane_width_m), cam, grid, spec),
-              lanes.right is None and lanes.left is not None and not _in_view(lanes.left.offset(-spec.lane_width_m), cam, grid, spec))
+    agree = lanes.agreement
     curves = tuple(_image_polyline(b, cam, spec) for b in (lanes.left, lanes.right))
     edge_paint = white[band] > 0
-    return GroundFit(lanes, left, right, agree, features, integral, hidden, expected_points(lanes, cam, region, spec),
+    return GroundFit(lanes, left, right, agree, features, integral, hidden,
+                     expected_points(_expected_lanes(lanes, before, spec), cam, region, spec),
                      (curves[0], curves[1]), lane_interior(lanes, grid, region, spec, edge_paint), hls_white, edge_paint)
+
+
+def coast(lanes: GroundLanes, before: GroundLanes, spec: GroundLaneSpec) -> GroundLanes:
+    """This frame's boundaries (with their ``agreement`` with the priors), a side not found in it held through the miss
+    when it was seen well within SUPPORT_HOLD_S (its held support ≥ COAST_SUPPORT_MIN: a stray fit on a far dash of the
+    next lane, which restarts the hold, is no line to hold) — between two dashes of a dashed line, over a short gap in
+    worn paint, the lane goes on as it was, as the image tracks coast through such a miss (``frame.coasting_sides``):
+
+    - the other side found: the missing one is that side a lane width over (where the model expects it anyway: its
+      last sighting is where it was before the car moved on, and on a Duckietown curve the car turns 40° in 0.6 s);
+    - neither found: both as last seen (straight on: nothing tells otherwise, and the hold is short).
+
+    A held side's own support is 0 (nothing of it is seen now): its held support, fading linearly over SUPPORT_HOLD_S
+    from its last sighting, is what it adds to the lane confidence, and only in a clean picture
+    (``confidence.lane_confidence``: at night it does not). A side found keeps the best support of its last
+    SUPPORT_HOLD_S, this frame's included, when it is the line held (agreement ≥ JUMP_AGREEMENT), so a dashed line does
+    not flicker as its dashes pass a camera that sees only a few of them (0.5 m ahead of a Duckiebot); a side neither
+    found nor held has 0."""
+    found = (lanes.left, lanes.right)
+    sides: list[GroundBoundary | None] = []
+    held: list[float] = []
+    coasted: list[bool] = []
+    for i, prior in enumerate((before.left, before.right)):
+        unseen = before.unseen_s[i]
+        fade = 1.0 - unseen / SUPPORT_HOLD_S if unseen >= 0.0 else 0.0  # time went back (a new run): nothing held
+        now, other = found[i], found[1 - i]
+        if now is None and before.held[i] >= COAST_SUPPORT_MIN and fade > 0.0:
+            kept = other.offset(spec.lane_width_m if i == 0 else -spec.lane_width_m) if other is not None else prior
+            if kept is not None:
+                sides.append(replace(kept, support=0.0, inliers=0))
+                held.append(before.held[i] * fade)
+                coasted.append(True)
+                continue
+        sides.append(now)
+        same = now is not None and lanes.agreement[i] >= JUMP_AGREEMENT
+        held.append(max(now.support, before.held[i]) if same else now.support if now is not None else 0.0)
+        coasted.append(False)
+    return replace(lanes, left=sides[0], right=sides[1], held=(held[0], held[1]), coasted=(coasted[0], coasted[1]))
 
 
 def _image_polyline(boundary: GroundBoundary | None, camera: CameraModel, spec: GroundLaneSpec) -> np.ndarray | None:
@@ -686,6 +807,25 @@ def _image_polyline(boundary: GroundBoundary | None, camera: CameraModel, spec: 
     pts = pts[np.hypot(pts[:, 0], pts[:, 1]) <= spec.far_m]
     u, v, ok = camera.project_ground(pts[:, 0], pts[:, 1])
     return np.stack([u[ok], v[ok]], axis=1) if ok.sum() >= 2 else None
+
+
+def _expected_lanes(lanes: GroundLanes, before: GroundLanes, spec: GroundLaneSpec) -> GroundLanes:
+    """Where the boundaries should show: this frame's; when it found neither, the last ones seen (the priors, kept
+    LOST_AFTER_S), else a straight lane of the spec's width centred on the camera. Paint that ends on a plain road (a
+    crossing without tape, a gap in worn paint) is absent, not hidden: the occlusion measure then finds road where the
+    boundaries should be, and something standing there hidden (with no boundary expected at all, every frame without
+    paint read as fully occluded and stopped the car at the first gap)."""
+    if lanes.left is not None or lanes.right is not None:
+        return lanes
+    if before.left is not None or before.right is not None:
+        return replace(lanes, left=before.left, right=before.right)
+    half = 0.5 * spec.lane_width_m
+    return replace(lanes, left=straight_boundary(half, spec), right=straight_boundary(-half, spec))
+
+
+def straight_boundary(y_m: float, spec: GroundLaneSpec) -> GroundBoundary:
+    """A straight boundary along the camera's heading, ``y_m`` to its left (negative: right), over the fit range."""
+    return GroundBoundary(0.0, 0.0, 1.0, -y_m, (spec.near_m, y_m), (spec.far_m, y_m), 0.0, 0)
 
 
 def expected_points(
