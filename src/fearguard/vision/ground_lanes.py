@@ -166,8 +166,13 @@ class GroundBoundary:
         return centre[None, :] + radius * np.stack([np.cos(theta), np.sin(theta)], axis=1)
 
     def _normal(self, x: float, y: float) -> np.ndarray:
-        g = np.array([2 * self.a * x + self.b, 2 * self.a * y + self.c])
-        return g / max(1e-12, float(np.hypot(*g)))
+        return self.normals(np.array([x], dtype=np.float64), np.array([y], dtype=np.float64))[0]
+
+    def normals(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """(n, 2) unit normals at the points, toward + (left of the way away from the camera): the gradient of
+        a·(x²+y²) + b·x + c·y + d."""
+        g = np.stack([2.0 * self.a * x + self.b, 2.0 * self.a * y + self.c], axis=1)
+        return g / np.maximum(np.hypot(g[:, 0], g[:, 1]), 1e-12)[:, None]
 
     def _foot(self, p: tuple[float, float]) -> np.ndarray:
         """The point of the curve nearest p."""
@@ -463,7 +468,8 @@ def _resolved(v: np.ndarray, x: np.ndarray, y: np.ndarray, inlier_m: float, spec
     tape, seen over 0.23 m of a Duckiebot's 0.43 m with the same small sagitta, is a curve (its span says so)."""
     if abs(v[0]) <= STRAIGHT or len(x) < 2:
         return v
-    span = float(np.max(np.hypot(x - x[int(np.argmin(x))], y - y[int(np.argmin(x))])))
+    i0 = int(np.argmin(x))
+    span = float(np.max(np.hypot(x - x[i0], y - y[i0])))
     if span >= RESOLVED_SPAN * (spec.far_m - spec.near_m) or span * span * 2.0 * abs(v[0]) / 8.0 >= inlier_m:
         return v
     mx, my = float(x.mean()), float(y.mean())
@@ -548,18 +554,16 @@ def _edge_of_wide_paint(boundary: GroundBoundary, paint: np.ndarray, grid: Groun
     edge runs as smoothly as a line — fitted, it bent the lane off the road. Unknown (too little of the flank in view):
     not wide."""
     pts = boundary.samples()
-    g = np.stack([2.0 * boundary.a * pts[:, 0] + boundary.b, 2.0 * boundary.a * pts[:, 1] + boundary.c], axis=1)
-    normal = g / np.maximum(np.hypot(g[:, 0], g[:, 1]), 1e-12)[:, None]  # toward + (left of the way away from the camera)
-    sign = 1.0 if outward_left else -1.0
+    outward = boundary.normals(pts[:, 0], pts[:, 1]) * (1.0 if outward_left else -1.0)
     for d in FLANK_M:
-        q = pts + sign * spec.metres(d) * normal
-        hit, seen = paint_at(paint, grid, bottom_v_px, q[:, 0], q[:, 1])
+        q = pts + spec.metres(d) * outward
+        hit, seen = _paint_at(paint, grid, bottom_v_px, q[:, 0], q[:, 1])
         if seen.sum() < FLANK_MIN_SAMPLES or hit[seen].mean() < FLANK_FILLED:
             return False
     return True
 
 
-def paint_at(paint: np.ndarray, grid: GroundGrid, bottom_v_px: int, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _paint_at(paint: np.ndarray, grid: GroundGrid, bottom_v_px: int, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(paint, in view) at ground points: the mask's pixel on the grid row nearest each point's range."""
     xs = grid.x_m  # decreasing from the grid's top row down
     rows = np.clip(np.searchsorted(-xs, -x), 0, len(xs) - 1)
@@ -753,10 +757,9 @@ def ground_lanes_in_image(
     band = slice(region.top_v_px, region.bottom_v_px + 1)
     integral = cv2.integral((features[band] > 0).view(np.uint8), sdepth=cv2.CV_64F)
     left, right = (_image_chord(b, cam, spec) for b in (lanes.left, lanes.right))
-    agree = lanes.agreement
     curves = tuple(_image_polyline(b, cam, spec) for b in (lanes.left, lanes.right))
     edge_paint = white[band] > 0
-    return GroundFit(lanes, left, right, agree, features, integral, hidden,
+    return GroundFit(lanes, left, right, lanes.agreement, features, integral, hidden,
                      expected_points(_expected_lanes(lanes, before, spec), cam, region, spec),
                      (curves[0], curves[1]), lane_interior(lanes, grid, region, spec, edge_paint), hls_white, edge_paint)
 
@@ -793,9 +796,13 @@ def coast(lanes: GroundLanes, before: GroundLanes, spec: GroundLaneSpec) -> Grou
                 coasted.append(True)
                 continue
         sides.append(now)
-        same = now is not None and lanes.agreement[i] >= JUMP_AGREEMENT
-        held.append(max(now.support, before.held[i]) if same else now.support if now is not None else 0.0)
         coasted.append(False)
+        if now is None:
+            held.append(0.0)
+        elif lanes.agreement[i] >= JUMP_AGREEMENT:  # the line held: its best of the hold
+            held.append(max(now.support, before.held[i]))
+        else:
+            held.append(now.support)
     return replace(lanes, left=sides[0], right=sides[1], held=(held[0], held[1]), coasted=(coasted[0], coasted[1]))
 
 
@@ -820,10 +827,10 @@ def _expected_lanes(lanes: GroundLanes, before: GroundLanes, spec: GroundLaneSpe
     if before.left is not None or before.right is not None:
         return replace(lanes, left=before.left, right=before.right)
     half = 0.5 * spec.lane_width_m
-    return replace(lanes, left=straight_boundary(half, spec), right=straight_boundary(-half, spec))
+    return replace(lanes, left=_straight_boundary(half, spec), right=_straight_boundary(-half, spec))
 
 
-def straight_boundary(y_m: float, spec: GroundLaneSpec) -> GroundBoundary:
+def _straight_boundary(y_m: float, spec: GroundLaneSpec) -> GroundBoundary:
     """A straight boundary along the camera's heading, ``y_m`` to its left (negative: right), over the fit range."""
     return GroundBoundary(0.0, 0.0, 1.0, -y_m, (spec.near_m, y_m), (spec.far_m, y_m), 0.0, 0)
 
